@@ -1,0 +1,210 @@
+"""The ``parslip`` command: run a scene, describe a scene, list the keys.
+
+Responsible for turning the command line into a run and every failure into
+one line and an exit code: 2 for bad input (scene, overrides, output path,
+rank count, time step), 3 for a run that failed on the way (non-finite state,
+slip beyond the halo).  Rank 0 decides anything on the filesystem and
+broadcasts the decision; every rank then takes the same branch.
+
+    mpirun -n 2 parslip run run/push.toml
+    parslip info run/push.toml --set drive.v0=1e-2
+    parslip keys
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+from .config import ConfigError, describe_keys, load_scene_file, parse_set, resolve
+
+EXIT_BAD_INPUT = 2
+EXIT_RUN_FAILED = 3
+
+UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_s of the top
+block (or c_r with material.velocity_unit = "c_r"); scene times, like the
+output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
+`parslip keys` lists every scene key with its default, units and range."""
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="parslip", description="Onset of frictional slip at adhesive elastic "
+                                "interfaces on a distributed Born lattice.", epilog=UNITS_HELP,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run", help="run a scene (under mpirun for several ranks)", epilog=UNITS_HELP,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    r.add_argument("scene", help="TOML scene file, e.g. run/push.toml")
+    r.add_argument("--out", help="output HDF5 file (default: out/<scene>.vtkhdf); opens in ParaView/pyvista")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key; the value is a TOML literal (drive.v0=1e-2, drive.mode=pull)")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    r.add_argument("--no-png", action="store_true", help="skip the space-time PNG")
+    r.add_argument("--quiet", action="store_true", help="no progress lines")
+    i = sub.add_parser("info", help="derived quantities, memory and output size of a scene", epilog=UNITS_HELP,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    i.add_argument("scene")
+    i.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    sub.add_parser("keys", help="every scene key with default, units and accepted range")
+    return p
+
+
+def _comm():
+    from mpi4py import MPI
+    return MPI.COMM_WORLD
+
+
+def _bcast(comm, fn):
+    """Run ``fn`` on rank 0 and broadcast its value or its ConfigError."""
+    res = None
+    if comm.Get_rank() == 0:
+        try:
+            res = ("ok", fn())
+        except ConfigError as e:
+            res = ("err", str(e))
+    res = comm.bcast(res, root=0)
+    if res[0] == "err":
+        raise ConfigError(res[1])
+    return res[1]
+
+
+def load(scene_path: str, sets: list[str]) -> dict:
+    raw = load_scene_file(scene_path)
+    return resolve(raw, [parse_set(s) for s in sets])
+
+
+def _out_path(args) -> str:
+    out = args.out or os.path.join("out", os.path.splitext(os.path.basename(args.scene))[0] + ".vtkhdf")
+    if os.path.isdir(out):
+        raise ConfigError(f"--out {out!r}: is a directory; accepted: a file path")
+    if os.path.exists(out) and not args.overwrite:
+        raise ConfigError(f"--out {out!r}: exists; accepted: a new path, or --overwrite to replace it")
+    d = os.path.dirname(out)
+    try:
+        if d:
+            os.makedirs(d, exist_ok=True)
+        if not os.access(d or ".", os.W_OK):
+            raise PermissionError
+    except OSError:
+        raise ConfigError(f"--out {out!r}: cannot write in {d or '.'!r}; accepted: a writable path") from None
+    return out
+
+
+def cmd_info(args) -> int:
+    from .engine import derive
+    scene = load(args.scene, args.set)
+    st = derive(scene)
+    lat, mat = st.lattice, st.material
+    n = lat.n_nodes
+    bytes_node = 150
+    frames, sites = st.n_frames, lat.n_top_sites
+    cells = 3 * n + sites
+    out_bytes = frames * sites * 21 + st.n_snapshots * (n * 64 + cells * 28)
+    print(f"scene            {args.scene}")
+    print(f"lattice          top {lat.top.rows} x {lat.top.cols}, bottom {lat.bottom.rows} x {lat.bottom.cols}: "
+          f"{n} nodes, contact l = {st.l:g} a")
+    print(f"top block        nu = {mat.nu} ({mat.model}): k_n = {mat.kn_top:.6g}, k_t = {mat.kt_top:.6g}")
+    print(f"substrate        k_n = {mat.kn_bottom:.6g}, k_t = {mat.kt_bottom:.6g}, c_l = {mat.c_l_bottom:.6g}")
+    print(f"wave speeds      c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})")
+    print(f"Rayleigh speed   c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)")
+    print(f"surface wave     {mat.c_surface_born:.6g} = {mat.c_surface_born / mat.c_s:.5f} c_s "
+          "(the Born lattice's own: k_t resists rotation)")
+    print(f"stability        omega_max = {st.omega_max:.6g}: dt < 2/omega_max = {st.dt_limit:.6g}  |  "
+          f"paper's dt < a/c_l = {st.dt_paper:.6g} (not enough for the stiff substrate)")
+    print(f"time step        dt = {st.dt:.6g} a/c ({st.dt / st.dt_limit:.3f} of the limit)")
+    print(f"steps            ramp {st.n_ramp} + settle {st.n_settle} + drive {st.n_drive} = {st.n_steps}"
+          f"  (l/c_r = {st.t_unit / st.dt:.1f} steps)")
+    print(f"output           {frames} interface frames (every {st.frame_every} steps), "
+          f"{st.n_snapshots} snapshots, about {out_bytes / 2**20:.1f} MiB")
+    print(f"memory           about {n * bytes_node / 2**20:.1f} MiB of state on one rank "
+          f"(+ about {n * 400 / 2**20:.0f} MiB on rank 0 while it finds omega_max)")
+    print(f"ranks            1 to {st.max_ranks()} (slabs of whole columns, at least "
+          f"{lat.ncols // st.max_ranks()} wide for a slip reach of {st.slip_reach:.3g} a)")
+    return 0
+
+
+def cmd_run(args) -> int:
+    from . import analysis
+    from .decomposition import SlabExchanger
+    from .engine import NonFiniteError, SlipReachError, Simulation, derive
+    from .output import Output, git_commit
+    from .progress import Progress, setup_logging
+
+    comm = _comm()
+    rank, size = comm.Get_rank(), comm.Get_size()
+    log = setup_logging(rank, size)
+    scene = _bcast(comm, lambda: load(args.scene, args.set))
+    omega = _bcast(comm, lambda: derive(scene).omega_max)
+    st = derive(scene, omega)
+    out = _bcast(comm, lambda: _out_path(args))
+    ex = SlabExchanger(comm) if size > 1 else None
+    sim = Simulation(st, ex, comm)          # raises ConfigError on every rank alike
+    prov = comm.bcast({"git_commit": git_commit(), "scene_file": os.path.abspath(args.scene),
+                       "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+                       "command": " ".join(sys.argv)} if rank == 0 else None, root=0)
+    log.info(f"{args.scene}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
+             f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {out}")
+    writer = Output(out, sim, comm, prov)
+    prog = Progress(st, scene["output.progress_s"], enabled=(rank == 0 and not args.quiet))
+    t0 = time.monotonic()
+    try:
+        sim.run(writer, prog)
+    except (NonFiniteError, SlipReachError) as e:
+        writer.close(status=f"failed: {e}")
+        prog.done()
+        if rank == 0:
+            print(f"parslip: run failed: {e}", file=sys.stderr)
+        return EXIT_RUN_FAILED
+    prog.done()
+    wall = time.monotonic() - t0
+    writer.close("complete")
+    counts = comm.reduce(sim.counters.copy(), root=0) if size > 1 else sim.counters
+    if rank == 0:
+        ups = st.n_steps * st.lattice.n_nodes / wall
+        log.info(f"done in {wall:.1f} s: {st.n_steps / wall:,.0f} steps/s, {ups / 1e6:.1f} M node-updates/s "
+                 f"on {size} rank(s); {int(counts[0])} bond breaks, {int(counts[1])} re-formations")
+        iface = analysis.load_interface(out)
+        print(analysis.summary(iface))
+        if not args.no_png:
+            png = os.path.splitext(out)[0] + "_spacetime.png"
+            analysis.spacetime_png(iface, png, f"{os.path.basename(args.scene)}: {scene['drive.mode']}, "
+                                   f"v0/c_r = {scene['drive.v0']:g}")
+            log.info(f"wrote {out} and {png}")
+    return 0
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return _main(args)
+    except Exception:
+        # An unexpected error on one rank must not leave the others waiting
+        # in a collective forever: print it and take the whole job down.
+        if args.cmd == "run" and _comm().Get_size() > 1:
+            import traceback
+            traceback.print_exc()
+            sys.stderr.flush()
+            _comm().Abort(1)
+        raise
+
+
+def _main(args) -> int:
+    try:
+        if args.cmd == "keys":
+            print(describe_keys())
+            return 0
+        if args.cmd == "info":
+            return cmd_info(args)
+        return cmd_run(args)
+    except ConfigError as e:
+        rank = 0
+        if args.cmd == "run":
+            rank = _comm().Get_rank()
+        if rank == 0:
+            print(f"parslip: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,207 @@
+"""Scene files: every key with its default, units and accepted range.
+
+A scene is a TOML file under ``run/``.  Every key it may hold is declared in
+SCHEMA below; anything else is an error.  ``resolve`` turns the file plus
+``--set key=value`` overrides into a flat, validated dict, and any bad value
+raises ``ConfigError`` with one line naming the key, the value and what is
+accepted.  The CLI turns that into exit code 2.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from typing import Any, Callable
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+import tomli_w
+
+from .physics import max_nu
+
+
+class ConfigError(ValueError):
+    """A bad scene: the message is the one line the user sees."""
+
+
+@dataclass(frozen=True)
+class Key:
+    default: Any
+    kind: type                  # float, int, str or bool
+    units: str
+    accepted: str               # human text, shown in errors and `parslip keys`
+    check: Callable[[Any], bool]
+    help: str
+
+
+def _range(lo=None, hi=None, lo_open=False, hi_open=False):
+    def ok(v):
+        if lo is not None and (v < lo or (lo_open and v == lo)):
+            return False
+        if hi is not None and (v > hi or (hi_open and v == hi)):
+            return False
+        return math.isfinite(v) if isinstance(v, float) else True
+    return ok
+
+
+def _choice(*opts):
+    return lambda v: v in opts
+
+
+SCHEMA: dict[str, Key] = {
+    # geometry ---------------------------------------------------------------
+    "lattice.top_rows": Key(10, int, "rows", ">= 2", _range(2), "rows of the sliding (top) block"),
+    "lattice.top_cols": Key(100, int, "nodes", ">= 4", _range(4),
+                            "nodes per row of the top block; the contact length is l = top_cols * a"),
+    "lattice.bottom_rows": Key(20, int, "rows", ">= 2", _range(2), "rows of the substrate (bottom) block"),
+    "lattice.bottom_cols": Key(300, int, "nodes", ">= top_cols, same parity", _range(4),
+                               "nodes per row of the substrate; the top block is centred on it"),
+    # materials --------------------------------------------------------------
+    "material.nu": Key(0.2, float, "-", "-1 < nu <= 0.25 (plane strain) or <= 1/3 (plane stress)",
+                       _range(-1.0, 1.0 / 3.0, lo_open=True), "Poisson ratio of the top block"),
+    "material.model": Key("plane_strain", str, "-", "'plane_strain' or 'plane_stress'",
+                          _choice("plane_strain", "plane_stress"), "how nu maps to c_l/c_s"),
+    "material.velocity_unit": Key("c_s", str, "-", "'c_s' or 'c_r'", _choice("c_s", "c_r"),
+                                  "internal velocity unit: top-block shear speed or Rayleigh speed"),
+    "material.bottom_kn": Key(100.0, float, "m c^2/a^2", "> 0", _range(0.0, lo_open=True),
+                              "normal bond stiffness of the substrate"),
+    "material.bottom_kt": Key(0.0, float, "m c^2/a^2", ">= 0", _range(0.0),
+                              "transverse bond stiffness of the substrate"),
+    # interface --------------------------------------------------------------
+    "interface.kx": Key(0.1, float, "m c^2/a^2", ">= 0", _range(0.0), "shear stiffness of an interface bond"),
+    "interface.ky": Key(0.3, float, "m c^2/a^2", "> 0", _range(0.0, lo_open=True),
+                        "normal stiffness of an interface bond"),
+    "interface.delta0": Key(0.5, float, "a", "> 0", _range(0.0, lo_open=True),
+                            "unloaded gap; a free top node re-bonds within this distance"),
+    "interface.delta_b": Key(0.7, float, "a", "> delta0", _range(0.0, lo_open=True),
+                             "bond length at which an interface bond breaks"),
+    "interface.reform_x0": Key("current", str, "-", "'current' or 'zero'", _choice("current", "zero"),
+                               "rest offset of a re-formed bond: its offset when it forms, or 0"),
+    "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
+                                "largest interface slip the MPI halo must reach across"),
+    # load and drive -------------------------------------------------------------
+    "load.FN": Key(1.0, float, "m c^2/a", ">= 0", _range(0.0),
+                   "total normal load, spread evenly over the top row SR"),
+    "load.ramp": Key(0.5, float, "l/c_r", ">= 0", _range(0.0), "time to ramp F_N up linearly"),
+    "load.settle": Key(4.0, float, "l/c_r", ">= 0", _range(0.0), "damped settling time at full F_N"),
+    "drive.mode": Key("push", str, "-", "'push' (T-), 'pull' (T+), 'shear' (T0) or 'none'",
+                      _choice("push", "pull", "shear", "none"), "which face is driven"),
+    "drive.v0": Key(1e-3, float, "c_r", "> 0", _range(0.0, lo_open=True), "drive velocity"),
+    "drive.duration": Key(100.0, float, "l/c_r", "> 0", _range(0.0, lo_open=True),
+                          "simulated drive time after settling"),
+    # time integration ---------------------------------------------------------
+    "time.safety": Key(0.9, float, "-", "0 < safety <= 1", _range(0.0, 1.0, lo_open=True),
+                       "dt = safety * 2/omega_max"),
+    "time.dt": Key(0.0, float, "a/c", "0 (auto) or 0 < dt < 2/omega_max", _range(0.0),
+                   "explicit time step; overrides time.safety"),
+    "time.zeta": Key(0.1, float, "c/a", ">= 0", _range(0.0), "velocity damping"),
+    # output -------------------------------------------------------------------
+    "output.interface_dt": Key(0.0, float, "l/c_r", ">= 0 (0 = auto: a/c_r, one frame per spacing a front at c_r crosses)",
+                               _range(0.0), "interval between interface frames"),
+    "output.snapshots": Key(20, int, "-", ">= 0", _range(0), "number of whole-lattice snapshots over the drive"),
+    "output.progress_s": Key(10.0, float, "s", "> 0", _range(0.0, lo_open=True),
+                             "wall-clock interval between progress lines"),
+}
+
+SECTIONS = sorted({k.split(".")[0] for k in SCHEMA})
+
+
+def _flatten(tree: dict, prefix: str = "") -> dict[str, Any]:
+    out = {}
+    for k, v in tree.items():
+        name = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, name + "."))
+        else:
+            out[name] = v
+    return out
+
+
+def _typed(name: str, value: Any) -> Any:
+    key = SCHEMA[name]
+    if key.kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, key.kind) or (key.kind is int and isinstance(value, bool)):
+        raise ConfigError(f"{name} = {value!r}: expected a {key.kind.__name__}"
+                          f"{'' if key.units == '-' else f' in {key.units}'}; accepted: {key.accepted}")
+    return value
+
+
+def parse_set(item: str) -> tuple[str, Any]:
+    """Parse one ``--set key=value``; the value is a TOML literal."""
+    if "=" not in item:
+        raise ConfigError(f"--set {item!r}: expected key=value, e.g. drive.v0=1e-3")
+    name, text = (s.strip() for s in item.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        # A bare word is a string: --set drive.mode=pull
+        value = text
+    return name, value
+
+
+def load_scene_file(path: str) -> dict[str, Any]:
+    try:
+        with open(path, "rb") as f:
+            return _flatten(tomllib.load(f))
+    except FileNotFoundError:
+        raise ConfigError(f"scene {path!r}: no such file; accepted: a TOML scene such as run/push.toml") from None
+    except IsADirectoryError:
+        raise ConfigError(f"scene {path!r}: is a directory; accepted: a TOML scene file") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"scene {path!r}: malformed TOML ({e}); accepted: a TOML scene file") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"scene {path!r}: not UTF-8 text; accepted: a TOML scene file") from None
+
+
+def resolve(raw: dict[str, Any], overrides: list[tuple[str, Any]] = ()) -> dict[str, Any]:
+    """Defaults, then the scene, then overrides; every value checked."""
+    flat = dict(raw)
+    for name, value in overrides:
+        flat[name] = value
+    scene = {}
+    for name, value in flat.items():
+        if name not in SCHEMA:
+            near = [k for k in SCHEMA if k.split(".")[-1] == name.split(".")[-1]]
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            raise ConfigError(f"{name} = {value!r}: unknown key{hint}; accepted keys: "
+                              + ", ".join(SCHEMA))
+        scene[name] = _typed(name, value)
+    for name, key in SCHEMA.items():
+        scene.setdefault(name, key.default)
+        if not key.check(scene[name]):
+            unit = "" if key.units == "-" else f" (in {key.units})"
+            raise ConfigError(f"{name} = {scene[name]!r}: out of range{unit}; accepted: {key.accepted}")
+    _cross_checks(scene)
+    return scene
+
+
+def _cross_checks(s: dict[str, Any]) -> None:
+    if s["interface.delta_b"] <= s["interface.delta0"]:
+        raise ConfigError(f"interface.delta_b = {s['interface.delta_b']!r}: must exceed interface.delta0 = "
+                          f"{s['interface.delta0']!r}; accepted: delta_b > delta0 (in a)")
+    nu_hi = max_nu(s["material.model"])
+    if s["material.nu"] > nu_hi:
+        raise ConfigError(f"material.nu = {s['material.nu']!r}: gives k_t < 0 in {s['material.model']}; "
+                          f"accepted: -1 < nu <= {nu_hi:.4g}")
+    if s["lattice.bottom_cols"] < s["lattice.top_cols"] or (s["lattice.bottom_cols"] - s["lattice.top_cols"]) % 2:
+        raise ConfigError(f"lattice.bottom_cols = {s['lattice.bottom_cols']!r}: the top block (top_cols = "
+                          f"{s['lattice.top_cols']}) must centre on it; accepted: >= top_cols with the same parity")
+
+
+def to_toml(scene: dict[str, Any]) -> str:
+    """The resolved scene as nested TOML text (stored in every output file)."""
+    tree: dict[str, dict] = {}
+    for name, value in scene.items():
+        sec, key = name.split(".", 1)
+        tree.setdefault(sec, {})[key] = value
+    return tomli_w.dumps(tree)
+
+
+def describe_keys() -> str:
+    rows = [f"{'key':26s} {'default':>14s}  {'units':10s} accepted"]
+    for name, k in SCHEMA.items():
+        rows.append(f"{name:26s} {k.default!r:>14s}  {k.units:10s} {k.accepted}\n{'':28s}{k.help}")
+    return "\n".join(rows)

@@ -1,0 +1,83 @@
+"""The stability limit of the time step: dt < 2/omega_max.
+
+Responsible for omega_max, the highest eigenfrequency of the whole lattice
+(both blocks, the interface springs, the fixed row), from the assembled
+sparse stiffness matrix (m = 1, so omega^2 are its eigenvalues).  The
+damped Verlet update of ``kernels.verlet_update`` is stable for
+omega dt <= 2 whatever zeta is (its characteristic polynomial has the root
+-1 exactly at omega dt = 2), so dt_max = 2/omega_max.  The paper's rule
+dt < a/c_l is far too loose for the stiff substrate.
+
+Breaking bonds and prescribing driven x-coordinates only remove stiffness
+or degrees of freedom, which cannot raise omega_max (Cauchy interlacing).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+
+from .lattice import BOTTOM, DIRECTIONS, FIXED, Lattice
+
+
+def stiffness_matrix(lattice: Lattice, kn, kt, kx: float, ky: float, mode: str = "none"):
+    """K (2N x 2N, DOF order x0, y0, x1, ...) and the mask of free DOFs."""
+    nodes = lattice.nodes_in_columns(0, lattice.ncols)
+    nbr = lattice.neighbour_gids(nodes)
+    rows, cols, vals = [], [], []
+
+    def add(i, j, kxx, kxy, kyy):
+        for (a, b, v) in ((0, 0, kxx), (0, 1, kxy), (1, 0, kxy), (1, 1, kyy)):
+            rows.extend([2 * i + a, 2 * j + b, 2 * i + a, 2 * j + b])
+            cols.extend([2 * i + b, 2 * j + a, 2 * j + b, 2 * i + a])
+            vals.extend([v, v, -v, -v])
+
+    for k in range(3):          # each bulk bond once
+        j = nbr[:, k]
+        m = j >= 0
+        i = nodes["gid"][m]
+        j = j[m]
+        b = nodes["block"][m]
+        knb, ktb = np.asarray(kn)[b], np.asarray(kt)[b]
+        nx, ny = DIRECTIONS[k]
+        kxx = (knb - ktb) * nx * nx + ktb
+        kxy = (knb - ktb) * nx * ny
+        kyy = (knb - ktb) * ny * ny + ktb
+        for (a, c, v) in ((0, 0, kxx), (0, 1, kxy), (1, 0, kxy), (1, 1, kyy)):
+            rows.append(np.concatenate([2 * i + a, 2 * j + a, 2 * i + a, 2 * j + a]))
+            cols.append(np.concatenate([2 * i + c, 2 * j + c, 2 * j + c, 2 * i + c]))
+            vals.append(np.concatenate([v, v, -v, -v]))
+    if lattice.has_interface:
+        s = np.arange(lattice.n_top_sites)
+        t = lattice.top
+        it = lattice.gid(1, 0, t.col0 + s)
+        ib = lattice.gid(BOTTOM, lattice.bottom.rows - 1, t.col0 + s)
+        for (a, kk) in ((0, kx), (1, ky)):
+            v = np.full(len(s), kk)
+            rows.append(np.concatenate([2 * it + a, 2 * ib + a, 2 * it + a, 2 * ib + a]))
+            cols.append(np.concatenate([2 * it + a, 2 * ib + a, 2 * ib + a, 2 * it + a]))
+            vals.append(np.concatenate([v, v, -v, -v]))
+    n = 2 * lattice.n_nodes
+    K = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n)).tocsr()
+    free = np.ones(n, bool)
+    fixed = lattice.kinds(nodes, mode) == FIXED
+    free[2 * nodes["gid"][fixed]] = False
+    free[2 * nodes["gid"][fixed] + 1] = False
+    return K, free
+
+
+def omega_max(lattice: Lattice, kn, kt, kx: float, ky: float) -> float:
+    """Highest eigenfrequency of the free lattice with intact interface bonds."""
+    K, free = stiffness_matrix(lattice, kn, kt, kx, ky)
+    K = K[free][:, free]
+    if K.shape[0] <= 200:
+        lam = np.linalg.eigvalsh(K.toarray())[-1]
+    else:
+        lam = eigsh(K, k=1, which="LA", tol=1e-12, return_eigenvectors=False,
+                    v0=np.ones(K.shape[0]), maxiter=100000)[0]
+    return float(np.sqrt(lam))
+
+
+def dt_max(omega: float) -> float:
+    return 2.0 / omega
