@@ -110,7 +110,7 @@ def cmd_info(args) -> int:
     print(f"Rayleigh speed   c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)")
     print(f"surface wave     {mat.c_surface_born:.6g} = {mat.c_surface_born / mat.c_s:.5f} c_s "
           "(the Born lattice's own: k_t resists rotation)")
-    print(f"stability        omega_max = {st.omega_max:.6g}: dt < 2/omega_max = {st.dt_limit:.6g}  |  "
+    print(f"stability        omega_max = {st.omega_max:.6g} ({st.omega_method}): dt < 2/omega_max = {st.dt_limit:.6g}  |  "
           f"paper's dt < a/c_l = {st.dt_paper:.6g} (not enough for the stiff substrate)")
     print(f"time step        dt = {st.dt:.6g} a/c ({st.dt / st.dt_limit:.3f} of the limit)")
     print(f"steps            ramp {st.n_ramp} + settle {st.n_settle} + drive {st.n_drive} = {st.n_steps}"
@@ -135,7 +135,7 @@ def cmd_run(args) -> int:
     rank, size = comm.Get_rank(), comm.Get_size()
     log = setup_logging(rank, size)
     scene = _bcast(comm, lambda: load(args.scene, args.set))
-    omega = _bcast(comm, lambda: derive(scene).omega_max)
+    omega = _bcast(comm, lambda: (lambda s: (s.omega_max, s.omega_method))(derive(scene)))
     st = derive(scene, omega)
     out = _bcast(comm, lambda: _out_path(args))
     ex = SlabExchanger(comm) if size > 1 else None

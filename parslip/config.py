@@ -55,7 +55,8 @@ SCHEMA: dict[str, Key] = {
     "lattice.top_rows": Key(10, int, "rows", ">= 2", _range(2), "rows of the sliding (top) block"),
     "lattice.top_cols": Key(100, int, "nodes", ">= 4", _range(4),
                             "nodes per row of the top block; the contact length is l = top_cols * a"),
-    "lattice.bottom_rows": Key(20, int, "rows", ">= 2", _range(2), "rows of the substrate (bottom) block"),
+    "lattice.bottom_rows": Key(20, int, "rows", ">= 2, or 0 for a free block with no substrate",
+                               lambda v: v == 0 or v >= 2, "rows of the substrate (bottom) block"),
     "lattice.bottom_cols": Key(300, int, "nodes", ">= top_cols, same parity", _range(4),
                                "nodes per row of the substrate; the top block is centred on it"),
     # materials --------------------------------------------------------------
@@ -186,7 +187,8 @@ def _cross_checks(s: dict[str, Any]) -> None:
     if s["material.nu"] > nu_hi:
         raise ConfigError(f"material.nu = {s['material.nu']!r}: gives k_t < 0 in {s['material.model']}; "
                           f"accepted: -1 < nu <= {nu_hi:.4g}")
-    if s["lattice.bottom_cols"] < s["lattice.top_cols"] or (s["lattice.bottom_cols"] - s["lattice.top_cols"]) % 2:
+    if s["lattice.bottom_rows"] and s["lattice.bottom_cols"] < s["lattice.top_cols"] or (
+            s["lattice.bottom_rows"] and (s["lattice.bottom_cols"] - s["lattice.top_cols"]) % 2):
         raise ConfigError(f"lattice.bottom_cols = {s['lattice.bottom_cols']!r}: the top block (top_cols = "
                           f"{s['lattice.top_cols']}) must centre on it; accepted: >= top_cols with the same parity")
 

@@ -41,6 +41,7 @@ class Setup:
     l: float                 # contact length, a
     t_unit: float            # l/c_r in internal time
     omega_max: float
+    omega_method: str        # "lanczos" (exact) or "bound" (rigorous upper bound)
     dt_limit: float          # 2/omega_max
     dt_paper: float          # a/c_l of the top block (the paper's criterion)
     dt: float
@@ -76,15 +77,17 @@ class Setup:
         return t_internal / self.t_unit
 
 
-def derive(scene: dict, omega: float | None = None) -> Setup:
+def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt."""
     mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
                               scene["material.bottom_kn"], scene["material.bottom_kt"])
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"])
     if omega is None:
-        omega = _omega_max(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
+        omega, method = _omega_max(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
                            scene["interface.kx"], scene["interface.ky"])
+    else:
+        omega, method = omega
     limit = _dt_max(omega)
     dt = scene["time.dt"] if scene["time.dt"] > 0 else scene["time.safety"] * limit
     if dt >= limit:
@@ -103,7 +106,7 @@ def derive(scene: dict, omega: float | None = None) -> Setup:
     reach = scene["interface.slip_reach"]
     if reach == 0:
         reach = (v0 * scene["drive.duration"] * t_unit if scene["drive.mode"] != "none" else 0.0) + 2.0
-    return Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega,
+    return Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                  dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                  n_drive=n_drive, frame_every=frame_every, snapshot_every=snapshot_every, v0=v0,
                  slip_reach=reach)

@@ -130,6 +130,7 @@ class Output:
         a["dt"] = st.dt
         a["dt_limit"] = st.dt_limit
         a["omega_max"] = st.omega_max
+        a["omega_method"] = st.omega_method
         a["c_s"], a["c_l"], a["c_r"] = st.material.c_s, st.material.c_l, st.material.c_r
         a["c_surface_born"] = st.material.c_surface_born
         a["kn_top"], a["kt_top"] = st.material.kn_top, st.material.kt_top

@@ -1,0 +1,117 @@
+"""Static equilibrium, energy conservation and the stability limit of the time step."""
+import numpy as np
+import pytest
+
+from helpers import SMALL, simulation
+from parslip.config import ConfigError
+from parslip.engine import NonFiniteError, derive
+from parslip.lattice import FIXED
+from helpers import scene
+
+
+def _gaps(sim):
+    s = sim.own_sites
+    it = sim.top_node[s]
+    ib = sim.bot_node[sim.partner[s] - sim.bot_g0]
+    return sim.delta0 + sim.u[it, 1] - sim.u[ib, 1]
+
+
+def test_static_compression_gap_and_reaction():
+    """Under F_N the interface bonds carry the whole load:
+    sum_i k_y (delta0 - gap_i) = F_N, so the mean gap is delta0 - F_N/(N k_y);
+    and the fixed row AB pushes back with F_N."""
+    FN, ky, N = 2.0, 0.3, 24
+    sim = simulation(SMALL, **{"drive.mode": "none", "load.FN": FN, "load.settle": 30.0, "drive.duration": 0.01})
+    sim.run(until=sim.setup.n_drive_start)
+    assert np.abs(sim.u - sim.u_prev).max() / sim.setup.dt < 1e-10      # at rest
+    gap = _gaps(sim)
+    assert gap.mean() == pytest.approx(0.5 - FN / (N * ky), abs=1e-10)
+    assert np.all(gap < 0.5)                                             # every bond compressed
+    # Reaction of the fixed row = minus the bond force on it.
+    f = np.zeros_like(sim.u)
+    from parslip import kernels
+    kernels.bulk_forces(sim.u, sim.nb, sim.block, sim.kn, sim.kt, sim.dirs, sim.n_owned, f)
+    fixed = sim.kind[:sim.n_owned] == FIXED
+    assert -f[:sim.n_owned][fixed, 1].sum() == pytest.approx(FN, rel=1e-9)
+
+
+def _V(sim, u):
+    keep = sim.u.copy()
+    sim.u[:] = u
+    e = sim.energy_per_node().sum()
+    sim.u[:] = keep
+    return e
+
+
+def _staggered_energy(sim, u_new, u_old):
+    """Energy conserved exactly by Verlet for a linear system:
+    H = |u_new - u_old|^2 / (2 dt^2) + 2 V((u_new + u_old)/2) - V(u_new)/2 - V(u_old)/2."""
+    dt = sim.setup.dt
+    kin = 0.5 * np.sum((u_new - u_old) ** 2) / dt**2
+    return kin + 2 * _V(sim, 0.5 * (u_new + u_old)) - 0.5 * _V(sim, u_new) - 0.5 * _V(sim, u_old)
+
+
+@pytest.mark.parametrize("zeta", [0.0, 0.05])
+def test_energy_balance(zeta):
+    """zeta = 0: energy drifts by < 1e-6 over 1e4 steps with a suddenly applied load.
+    zeta > 0: energy lost equals the damping work, sum zeta |u(n+1) - u(n-1)|^2 / (4 dt)."""
+    sim = simulation(SMALL, **{"drive.mode": "none", "load.ramp": 0.0, "load.settle": 0.0,
+                               "interface.delta_b": 100.0, "time.zeta": zeta, "drive.duration": 1e-3,
+                               "load.FN": 3.0})
+    dt = sim.setup.dt
+    sim.step()
+    h0 = _staggered_energy(sim, sim.u, sim.u_prev)
+    dissipated = 0.0
+    for _ in range(10_000):
+        older = sim.u_prev.copy()
+        sim.step()
+        dissipated += zeta * np.sum((sim.u - older) ** 2) / (4 * dt)
+    h1 = _staggered_energy(sim, sim.u, sim.u_prev)
+    scale = abs(h0) + 0.5 * np.sum(((sim.u - sim.u_prev) / dt) ** 2)
+    assert abs(h1 + dissipated - h0) / scale < 1e-6
+    assert sim.counters[0] == 0
+    if zeta == 0.0:
+        # The plain energy (central velocity, V at the step) stays close too: no drift.
+        assert np.abs(sim.u).max() > 1e-3          # it really moved
+
+
+def _free_block_run(factor, steps):
+    sim = simulation(SMALL, **{"drive.mode": "none", "load.ramp": 0.0, "load.settle": 0.0, "drive.duration": 0.01,
+                               "time.zeta": 0.0, "interface.delta_b": 100.0, "load.FN": 0.0})
+    st = sim.setup
+    assert st.omega_method == "lanczos"
+    st.dt = factor * st.dt_limit
+    rng = np.random.default_rng(1)
+    sim.u[:sim.n_owned] = 1e-3 * rng.standard_normal((sim.n_owned, 2))
+    sim.u[sim.kind == FIXED] = 0.0
+    sim.u_prev[:] = sim.u
+    amp = []
+    for _ in range(steps):
+        sim.step()
+        amp.append(np.abs(sim.u).max())
+    return np.array(amp), sim
+
+
+def test_stability_limit_is_sharp():
+    """dt = 0.99 * 2/omega_max stays bounded; 1.01 * 2/omega_max grows without bound."""
+    below, _ = _free_block_run(0.99, 3000)
+    above, _ = _free_block_run(1.01, 600)
+    assert below.max() < 0.1
+    assert above[-1] > 1e3 * above[0]
+
+
+def test_divergence_is_reported_with_step_and_place():
+    sim = simulation(SMALL, **{"drive.mode": "none", "load.ramp": 0.0, "load.settle": 0.0, "drive.duration": 50.0})
+    sim.setup.dt = 1.2 * sim.setup.dt_limit
+    sim.u[:sim.n_owned] = 1e-3
+    with pytest.raises(NonFiniteError, match=r"non-finite at step \d+ .* at node \d+ \((top|bottom) block, row"):
+        sim.run()
+
+
+def test_dt_above_limit_is_refused():
+    st = derive(scene(**SMALL))
+    with pytest.raises(ConfigError, match=r"time\.dt = .*above the stability limit"):
+        derive(scene(**{**SMALL, "time.dt": 1.001 * st.dt_limit}))
+    assert derive(scene(**{**SMALL, "time.dt": 0.999 * st.dt_limit})).dt == pytest.approx(0.999 * st.dt_limit)
+    # The paper's a/c_l criterion would allow a step far beyond the real limit.
+    assert st.dt_paper > 5 * st.dt_limit
