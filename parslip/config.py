@@ -125,7 +125,8 @@ def _typed(name: str, value: Any) -> Any:
     if key.kind is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if not isinstance(value, key.kind) or (key.kind is int and isinstance(value, bool)):
-        raise ConfigError(f"{name} = {value!r}: expected a {key.kind.__name__}"
+        kind = {float: "a number", int: "an integer", str: "a string", bool: "true or false"}[key.kind]
+        raise ConfigError(f"{name} = {value!r}: expected {kind}"
                           f"{'' if key.units == '-' else f' in {key.units}'}; accepted: {key.accepted}")
     return value
 

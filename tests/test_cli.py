@@ -1,0 +1,114 @@
+"""Bad input: one line naming the key, the value and what is accepted, exit code 2.
+
+Also: an existing output is never overwritten without --overwrite, and
+`parslip info` reports the derived quantities.
+"""
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from parslip.cli import main
+
+MPIEXEC = shutil.which("mpiexec")
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+@pytest.fixture
+def push(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text('[drive]\nmode = "push"\nv0 = 1e-3\n')
+    return str(p)
+
+
+CASES = [
+    # (overrides, fragments that the one error line must contain)
+    (["--set", "drive.speed=1"], ["drive.speed", "unknown key", "accepted keys"]),
+    (["--set", "load.FN=\"heavy\""], ["load.FN", "'heavy'", "expected a number"]),
+    (["--set", "lattice.top_rows=2.5"], ["lattice.top_rows", "2.5", "expected an integer"]),
+    (["--set", "interface.kx=-0.1"], ["interface.kx", "-0.1", ">= 0"]),
+    (["--set", "material.bottom_kn=-5"], ["material.bottom_kn", "-5.0", "> 0"]),
+    (["--set", "interface.delta_b=0.5"], ["interface.delta_b", "0.5", "delta_b > delta0"]),
+    (["--set", "material.nu=0.3"], ["material.nu", "0.3", "k_t < 0", "nu <= 0.25"]),
+    (["--set", "material.nu=0.3", "--set", "material.model=plane_stress"], None),   # fine in plane stress
+    (["--set", "drive.v0=0"], ["drive.v0", "0.0", "> 0"]),
+    (["--set", "drive.v0=-1e-3"], ["drive.v0", "-0.001", "> 0"]),
+    (["--set", "time.dt=1.0"], ["time.dt", "1.0", "above the stability limit", "accepted"]),
+    (["--set", "drive.mode=sideways"], ["drive.mode", "sideways", "'push'"]),
+    (["--set", "novalue"], ["novalue", "key=value"]),
+]
+
+
+@pytest.mark.parametrize("extra,frags", CASES)
+def test_bad_values_give_one_line_and_exit_2(capsys, push, extra, frags):
+    code, out, err = _run(capsys, "info", push, *extra)
+    if frags is None:
+        assert code == 0, err
+        return
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("parslip: error: "), err
+    assert "Traceback" not in err
+    for frag in frags:
+        assert frag in lines[0], (frag, lines[0])
+
+
+def test_missing_and_malformed_scene(capsys, tmp_path):
+    code, _, err = _run(capsys, "info", str(tmp_path / "nope.toml"))
+    assert code == 2 and "no such file" in err and len(err.strip().splitlines()) == 1
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[drive\nmode = push\n")
+    code, _, err = _run(capsys, "info", str(bad))
+    assert code == 2 and "malformed TOML" in err and len(err.strip().splitlines()) == 1
+    code, _, err = _run(capsys, "info", str(tmp_path))
+    assert code == 2 and "directory" in err
+
+
+def test_existing_output_is_never_overwritten(capsys, tmp_path, push):
+    out = tmp_path / "r.vtkhdf"
+    out.write_bytes(b"precious")
+    code, _, err = _run(capsys, "run", push, "--out", str(out))
+    assert code == 2 and "exists" in err and "--overwrite" in err
+    assert out.read_bytes() == b"precious"
+
+
+def test_info_reports_both_stability_criteria(capsys, push):
+    code, out, _ = _run(capsys, "info", push)
+    assert code == 0
+    for frag in ("k_n = 2.33333", "k_t = 0.111111", "c_r = 0.910996", "0.94750 c_s", "2/omega_max",
+                 "a/c_l = 0.612372", "ranks            1 to", "MiB"):
+        assert frag in out, frag
+
+
+def test_keys_lists_units_and_ranges(capsys):
+    code, out, _ = _run(capsys, "keys")
+    assert code == 0 and "drive.v0" in out and "c_r" in out and "l/c_r" in out
+
+
+@pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
+def test_too_many_ranks_is_bad_input(tmp_path):
+    sc = tmp_path / "tiny.toml"
+    sc.write_text("[lattice]\ntop_rows = 3\ntop_cols = 8\nbottom_rows = 3\nbottom_cols = 20\n"
+                  "[drive]\nv0 = 0.01\nduration = 1.0\n")
+    p = subprocess.run([MPIEXEC, "-n", "3", sys.executable, "-m", "parslip", "run", str(sc),
+                        "--out", str(tmp_path / "o.vtkhdf")], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stderr
+    lines = [ln for ln in p.stderr.strip().splitlines() if ln.startswith("parslip: error")]
+    assert len(lines) == 1 and "ranks = 3" in lines[0] and "accepted: 1 to" in lines[0], p.stderr
+    assert "Traceback" not in p.stderr
+    assert not os.path.exists(tmp_path / "o.vtkhdf")
+
+
+def test_console_script_exit_code_without_traceback(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "parslip", "run", str(tmp_path / "missing.toml")],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert p.stderr.strip().splitlines() == [f"parslip: error: scene '{tmp_path / 'missing.toml'}': no such file; "
+                                             "accepted: a TOML scene such as run/push.toml"]

@@ -1,0 +1,121 @@
+"""The output contract: interface datasets, VTKHDF snapshots that pyvista opens, provenance."""
+import os
+
+import h5py
+import numpy as np
+import pytest
+
+from parslip import analysis
+from parslip.cli import main
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+SCENE = """
+[lattice]
+top_rows = 4
+top_cols = 24
+bottom_rows = 4
+bottom_cols = 40
+[load]
+ramp = 0.5
+settle = 2.0
+[drive]
+mode = "pull"
+v0 = 0.02
+duration = 4.0
+[output]
+snapshots = 2
+"""
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    d = tmp_path_factory.mktemp("out")
+    sc = d / "small.toml"
+    sc.write_text(SCENE)
+    out = d / "small.vtkhdf"
+    assert main(["run", str(sc), "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_interface_contract(result):
+    with h5py.File(result, "r") as f:
+        g = f["interface"]
+        nf, ns = g["intact"].shape
+        assert ns == 24 and g["intact"].dtype == np.uint8
+        assert g["ux"].shape == g["uy"].shape == (nf, ns) and g["time"].shape == (nf,)
+        x, t = g["x"][...], g["time"][...]
+        assert np.all(np.diff(x) > 0) and 0 <= x[0] < 0.03 and 0.97 < x[-1] <= 1
+        # One frame per lattice spacing crossed by a front at c_r: dt_frame <= (a/c_r) = 1/l in l/c_r.
+        assert t[0] == 0.0 and np.diff(t).max() <= 1.0 / 24 + 1e-12
+        assert t[-1] == pytest.approx(4.0, abs=1.0 / 24)
+        assert g.attrs["frames_written"] == nf
+        a = f.attrs
+        for key in ("scene", "parslip_version", "git_commit", "dt", "omega_max", "c_s", "c_l", "c_r",
+                    "n_nodes", "n_steps", "n_ranks"):
+            assert key in a, key
+        assert a["status"] == "complete" and a["n_nodes"] == 4 * 24 + 4 * 40
+        assert 'mode = "pull"' in a["scene"] and "v0 = 0.02" in a["scene"]
+        assert a["dt"] < 2 / a["omega_max"]
+        assert (g["intact"][...] == 0).any()                 # something happened
+        # Pull: the driven front face moves at v0 c_r: ux of the front node at the end ~ v0 t (in l).
+        assert g["ux"][-1, -1] == pytest.approx(0.02 * t[-1], rel=0.5)
+
+
+def test_vtkhdf_opens_in_pyvista(result):
+    pv = pytest.importorskip("pyvista")
+    r = pv.get_reader(str(result))
+    r.reader.UpdateInformation()
+    assert r.reader.GetNumberOfSteps() == 3
+    with h5py.File(result, "r") as f:
+        n_nodes = f.attrs["n_nodes"]
+        last_pts = f["VTKHDF/Points"][2 * n_nodes:]
+        intact_last = f["interface/intact"][-1]
+    r.reader.SetStep(2)
+    mesh = r.read()
+    assert mesh.n_points == n_nodes
+    np.testing.assert_array_equal(np.asarray(mesh.points), last_pts)
+    for name in ("velocity", "sxx", "syy", "sxy"):
+        assert name in mesh.point_data
+    iface = mesh.cell_data["interface"] == 1
+    assert iface.sum() == 24
+    np.testing.assert_array_equal(mesh.cell_data["intact"][iface], intact_last)
+    # Bond cells: bulk bonds join nodes about a apart.
+    lines = mesh.cells.reshape(-1, 3)[:, 1:]
+    bulk = lines[~iface]
+    length = np.linalg.norm(mesh.points[bulk[:, 0]] - mesh.points[bulk[:, 1]], axis=1)
+    assert np.allclose(length, 1.0, atol=0.1)
+    # Under F_N the top block is compressed: sigma_yy < 0 on average in the top rows.
+    assert np.mean(mesh.point_data["syy"][np.asarray(mesh.points)[:, 1] > 4]) < 0
+
+
+def test_spacetime_png_written(result):
+    png = str(result).replace(".vtkhdf", "_spacetime.png")
+    assert os.path.getsize(png) > 1000
+    with open(png, "rb") as fh:
+        assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_front_catalogue_on_a_drawn_pattern():
+    """Two pulses drawn by hand: one from x = 0 moving right at 0.5 sites per frame,
+    one from the far end moving left at 1 site per frame."""
+    nf, ns = 60, 40
+    t = np.arange(nf) * 0.1
+    x = (np.arange(ns) + 0.5) / ns
+    intact = np.ones((nf, ns), np.uint8)
+    for k in range(nf):
+        s = k // 2
+        if s < ns:
+            intact[k, s] = 0                    # forward pulse, width 1 site
+        s2 = ns - 1 - (k - 20)
+        if 20 <= k and 0 <= s2:
+            intact[k, s2] = 0                   # backward pulse from frame 20
+    fr = analysis.fronts({"t": t, "x": x, "intact": intact})
+    assert len(fr) == 2
+    a, b = fr
+    assert a.direction == 1 and a.x_start == pytest.approx(x[0]) and a.t_start == 0.0
+    assert a.speed == pytest.approx((1 / ns) / 0.2, rel=0.05)
+    assert b.direction == -1 and b.x_start == pytest.approx(x[-1]) and b.t_start == pytest.approx(2.0)
+    assert b.speed == pytest.approx((1 / ns) / 0.1, rel=0.05)
+    tb, xb = analysis.first_break({"t": t, "x": x, "intact": intact})
+    assert tb == 0.0 and list(xb) == [x[0]]
