@@ -1,0 +1,51 @@
+"""The paper's three rupture modes from the shipped scenes (shortened in time only).
+
+T-  push : first break at the rear edge x/l = 0 near t c_r/l = 5; new pulses
+           nucleate there about every 10 l/c_r and run forward at v << c_r.
+T+  pull : the mirror image, from x/l = 1 backward.
+T0  shear: no break for a long time (paper: about 65 l/c_r), then one front
+           from the rear edge across the whole interface near c_r.
+"""
+import os
+
+import pytest
+
+from parslip import analysis
+from parslip.cli import main
+
+RUN = os.path.join(os.path.dirname(__file__), "..", "run")
+
+
+def _run(tmp_path, name, *sets):
+    out = tmp_path / f"{name}.vtkhdf"
+    args = ["run", os.path.join(RUN, f"{name}.toml"), "--out", str(out), "--quiet", "--no-png"]
+    for s in sets:
+        args += ["--set", s]
+    assert main(args) == 0
+    return analysis.load_interface(str(out))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,edge,direction", [("push", 0.0, 1), ("pull", 1.0, -1)])
+def test_pulses_nucleate_at_the_driven_edge(tmp_path, name, edge, direction):
+    iface = _run(tmp_path, name, "drive.duration=27.0", "output.snapshots=0")
+    t0, x0 = analysis.first_break(iface)
+    assert 4.0 < t0 < 6.5
+    assert all(abs(x - edge) < 0.02 for x in x0)
+    fr = [f for f in analysis.fronts(iface) if abs(f.x_start - edge) < 0.05]
+    assert len(fr) >= 2
+    assert all(f.direction == direction for f in fr)
+    assert all(f.speed < 0.05 for f in fr)                         # slow: v << c_r
+    period = fr[1].t_start - fr[0].t_start
+    assert 7.0 < period < 13.0                                      # about every 10 l/c_r
+
+
+@pytest.mark.slow
+def test_shear_gives_one_late_fast_crack(tmp_path):
+    iface = _run(tmp_path, "shear", "drive.duration=73.0", "output.snapshots=0")
+    t0, x0 = analysis.first_break(iface)
+    assert 55.0 < t0 < 75.0
+    assert min(x0) < 0.05                                           # starts at the rear edge
+    fr = analysis.fronts(iface)
+    assert fr and fr[0].direction == 1 and fr[0].sites == 100
+    assert fr[0].speed > 0.7                                        # near c_r
