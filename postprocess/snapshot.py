@@ -23,12 +23,21 @@ n = r.reader.GetNumberOfSteps()
 k = a.step % n
 r.reader.SetStep(k)
 mesh = r.read()
+import numpy as np  # noqa: E402
+
 pl = pv.Plotter(off_screen=True, window_size=(1600, 500))
-pl.add_mesh(mesh, scalars=a.field, cmap="coolwarm", line_width=2)
+vals = np.asarray(mesh.point_data[a.field])
+lim = float(np.percentile(np.abs(vals), 99)) or 1.0
+pl.add_mesh(mesh, scalars=a.field, cmap="coolwarm", clim=(-lim, lim) if vals.ndim == 1 else None, line_width=2)
 intact = mesh.extract_cells((mesh.cell_data["interface"] == 1) & (mesh.cell_data["intact"] == 1))
 if intact.n_cells:
     pl.add_mesh(intact, color="red", line_width=3)
 pl.view_xy()
+iface = mesh.extract_cells(mesh.cell_data["interface"] == 1)
+if iface.n_cells:                       # frame the contact, not the whole substrate
+    b = list(iface.bounds)
+    w = b[1] - b[0]
+    pl.reset_camera(bounds=[b[0] - 0.1 * w, b[1] + 0.1 * w, b[2] - 0.15 * w, b[3] + 0.15 * w, 0, 0])
 png = a.png or os.path.splitext(a.h5)[0] + f"_{a.field}_{k}.png"
 pl.screenshot(png)
 print(png, f"(step {k} of {n}, t = {r.reader.GetTimeValue():.3f} l/c_r)")
