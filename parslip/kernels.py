@@ -19,6 +19,16 @@ FREE, FIXED, DRIVEN = 0, 1, 2
 BREAKS, FORMS = 0, 1
 
 
+@njit(cache=True, inline="always")
+def _bond_force(u, i, j, nx, ny, kd, kt):
+    """Force on node i from its bond to j along reference direction (nx, ny):
+    (k_n - k_t) [(u_j - u_i).n] n + k_t (u_j - u_i)."""
+    dx = u[j, 0] - u[i, 0]
+    dy = u[j, 1] - u[i, 1]
+    p = kd * (dx * nx + dy * ny)
+    return p * nx + kt * dx, p * ny + kt * dy
+
+
 @njit(cache=True)
 def bulk_forces(u, nb, block, kn, kt, dirs, n_owned, f):
     """Born bond forces (paper Eq. 2.1) on the owned nodes, into ``f``.
@@ -29,22 +39,15 @@ def bulk_forces(u, nb, block, kn, kt, dirs, n_owned, f):
     for i in range(n_owned):
         b = block[i]
         kd = kn[b] - kt[b]
-        ktb = kt[b]
         fx = 0.0
         fy = 0.0
-        uix = u[i, 0]
-        uiy = u[i, 1]
         for k in range(6):
             j = nb[i, k]
             if j < 0:
                 continue
-            dx = u[j, 0] - uix
-            dy = u[j, 1] - uiy
-            nx = dirs[k, 0]
-            ny = dirs[k, 1]
-            p = kd * (dx * nx + dy * ny)
-            fx += p * nx + ktb * dx
-            fy += p * ny + ktb * dy
+            gx, gy = _bond_force(u, i, j, dirs[k, 0], dirs[k, 1], kd, kt[b])
+            fx += gx
+            fy += gy
         f[i, 0] = fx
         f[i, 1] = fy
 
@@ -194,7 +197,6 @@ def node_stress(u, nb, block, kn, kt, dirs, n_owned, scale, out):
     for i in range(n_owned):
         b = block[i]
         kd = kn[b] - kt[b]
-        ktb = kt[b]
         sxx = 0.0
         syy = 0.0
         sxy = 0.0
@@ -202,13 +204,9 @@ def node_stress(u, nb, block, kn, kt, dirs, n_owned, scale, out):
             j = nb[i, k]
             if j < 0:
                 continue
-            dx = u[j, 0] - u[i, 0]
-            dy = u[j, 1] - u[i, 1]
             nx = dirs[k, 0]
             ny = dirs[k, 1]
-            p = kd * (dx * nx + dy * ny)
-            fx = p * nx + ktb * dx
-            fy = p * ny + ktb * dy
+            fx, fy = _bond_force(u, i, j, nx, ny, kd, kt[b])
             sxx += fx * nx
             syy += fy * ny
             sxy += fx * ny

@@ -16,6 +16,14 @@ SMALL = {"lattice.top_rows": 4, "lattice.top_cols": 24, "lattice.bottom_rows": 4
          "output.snapshots": 3}
 
 
+def small_toml(**kw) -> str:
+    """SMALL (plus overrides) as scene-file text, for tests that go through the command line."""
+    from parslip.config import to_toml
+    over = dict(SMALL)
+    over.update(kw)
+    return to_toml(over)
+
+
 def scene(**kw) -> dict:
     """Resolved scene from keyword overrides: scene(**{"drive.v0": 1e-2})."""
     return resolve({}, list(kw.items()))

@@ -5,34 +5,19 @@ import h5py
 import numpy as np
 import pytest
 
+from helpers import small_toml
 from parslip import analysis
 from parslip.cli import main
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
-SCENE = """
-[lattice]
-top_rows = 4
-top_cols = 24
-bottom_rows = 4
-bottom_cols = 40
-[load]
-ramp = 0.5
-settle = 2.0
-[drive]
-mode = "pull"
-v0 = 0.02
-duration = 4.0
-[output]
-snapshots = 2
-"""
 
 
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
     d = tmp_path_factory.mktemp("out")
     sc = d / "small.toml"
-    sc.write_text(SCENE)
+    sc.write_text(small_toml(**{"drive.mode": "pull", "drive.duration": 4.0, "output.snapshots": 2}))
     out = d / "small.vtkhdf"
     assert main(["run", str(sc), "--out", str(out), "--quiet"]) == 0
     return out

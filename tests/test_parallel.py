@@ -13,7 +13,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import SMALL, scene
+from helpers import SMALL, scene, small_toml
 from parslip.decomposition import LEFT, RIGHT, SlabExchanger, build_layout, partition, bottom_site_reach
 from parslip.engine import Simulation, derive
 from parslip.lattice import Lattice
@@ -78,22 +78,6 @@ def test_parallel_state_matches_serial_by_global_id():
     np.testing.assert_array_equal(par.partner[own], ser.partner[par.layout.top_gsite[own]])
 
 
-SMALL_TOML = """
-[lattice]
-top_rows = 4
-top_cols = 24
-bottom_rows = 4
-bottom_cols = 40
-[load]
-ramp = 0.5
-settle = 2.0
-[drive]
-mode = "push"
-v0 = 0.02
-duration = 6.0
-[output]
-snapshots = 3
-"""
 
 
 def _datasets(path):
@@ -107,7 +91,7 @@ def _datasets(path):
 @pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
 def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
     sc = tmp_path / "small.toml"
-    sc.write_text(SMALL_TOML)
+    sc.write_text(small_toml())
     files = {}
     for n in (1, 2, 3):
         out = tmp_path / f"r{n}.vtkhdf"
