@@ -115,3 +115,21 @@ def test_dt_above_limit_is_refused():
     assert derive(scene(**{**SMALL, "time.dt": 0.999 * st.dt_limit})).dt == pytest.approx(0.999 * st.dt_limit)
     # The paper's a/c_l criterion would allow a step far beyond the real limit.
     assert st.dt_paper > 5 * st.dt_limit
+
+
+@pytest.mark.parametrize("over", [
+    {"material.bottom_kn": 1e4},                              # a 100x stiffer substrate
+    {"material.nu": 0.25},                                    # k_t = 0 exactly
+    {"material.nu": -0.5, "material.model": "plane_stress"},  # auxetic block
+    {"interface.ky": 50.0, "interface.kx": 50.0},             # interface stiffer than the block
+])
+def test_extreme_materials_stay_bounded_at_safety_099(over):
+    """The dt rule follows the stiffest part of the system: stable at 0.99 of the limit."""
+    sim = simulation(SMALL, **{"time.safety": 0.99, "drive.duration": 2.0, "time.zeta": 0.0, **over})
+    st = sim.setup
+    assert st.dt == pytest.approx(0.99 * 2 / st.omega_max)
+    sim.run()
+    assert np.isfinite(sim.u).all() and np.abs(sim.u).max() < 5.0
+    if over.get("material.bottom_kn") == 1e4:
+        # omega_max^2 of an infinite lattice of k_n is 6 k_n; a 4-row block stays below it.
+        assert 1.0 <= st.dt_limit / (2 / np.sqrt(6e4 + 2 * 0.3)) < 1.1
