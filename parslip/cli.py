@@ -156,6 +156,13 @@ def cmd_run(args) -> int:
         if rank == 0:
             print(f"parslip: run failed: {e}", file=sys.stderr)
         return EXIT_RUN_FAILED
+    except KeyboardInterrupt:
+        # Keep what was written, and say so in the file: frames_written tells how far it got.
+        writer.close(status=f"interrupted at step {sim.n}")
+        prog.done()
+        if rank == 0:
+            print(f"parslip: interrupted at step {sim.n}; partial output kept in {out}", file=sys.stderr)
+        return 130
     prog.done()
     wall = time.monotonic() - t0
     writer.close("complete")
