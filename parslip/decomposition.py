@@ -140,7 +140,6 @@ def build_layout(lattice: Lattice, rank: int, size: int, slip_reach: float) -> L
     nodes = {k: np.concatenate([p[k] for p in parts]) for k in own}
     n_owned = len(own["gid"])
     n_left = len(halo_side[LEFT]["gid"])
-    local_of = {int(g): i for i, g in enumerate(nodes["gid"])}
 
     # Node channel: what my neighbours keep of my owned nodes, by the same rule.
     nch = Channel()
@@ -183,7 +182,6 @@ def build_layout(lattice: Lattice, rank: int, size: int, slip_reach: float) -> L
     for side in SIDES:
         rch.send[side] = np.array([i for i in nch.send[side] if is_bot[i]], np.int64)
         rch.recv[side] = np.array([i for i in nch.recv[side] if is_bot[i]], np.int64)
-    del local_of
     return LocalLayout(rank=rank, size=size, bounds=bounds, nodes=nodes, n_owned=n_owned,
                        node_channel=nch, top_gsite=top_gsite, top_node=top_node.astype(np.int64),
                        top_owned=top_owned, top_channel=tch, bot_gsite0=bot_gsite0,

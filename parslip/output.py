@@ -75,12 +75,10 @@ class Output:
         self.node0 = int(lay.nodes["gid"][0]) if lay.n_owned else 0
         self.site0 = int(lay.top_gsite[sim.own_sites[0]]) if len(sim.own_sites) else 0
         n = lay.n_owned
-        ks = np.repeat(np.arange(3)[None, :], n, 0)
         has = sim.nb[:, :3] >= 0
         gi = lay.nodes["gid"][:n]
         self.bulk_cells = np.stack([np.repeat(gi[:, None], 3, 1)[has],
                                     lay.nodes["gid"][sim.nb[:, :3][has]]], axis=1).astype(np.int64)
-        del ks
         counts = self._allgather(len(self.bulk_cells))
         self.cell0 = int(sum(counts[:self.rank]))
         self.n_bulk_cells = int(sum(counts))

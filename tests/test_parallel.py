@@ -124,3 +124,17 @@ def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
         across = rebonded & (owner(np.maximum(partner, 0)) != top_owner[None, :])
         crossed[n] = int(across.sum())
     assert crossed[2] > 0 and crossed[3] > 0, crossed
+
+
+@pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
+def test_slip_beyond_the_halo_stops_the_run(tmp_path):
+    """A slab's halo reaches interface.slip_reach + 6 columns; sliding further is refused, not wrong."""
+    sc = tmp_path / "small.toml"
+    sc.write_text(small_toml(**{"interface.slip_reach": 0.2}))
+    out = tmp_path / "o.vtkhdf"
+    p = subprocess.run([MPIEXEC, "-n", "2", sys.executable, "-m", "parslip", "run", str(sc), "--out", str(out),
+                        "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 3, p.stderr
+    assert "interface.slip_reach" in p.stderr and "Traceback" not in p.stderr
+    with h5py.File(out, "r") as f:
+        assert f.attrs["status"].startswith("failed: interface slip reached")
