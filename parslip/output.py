@@ -150,6 +150,8 @@ class Output:
         if self.root:
             g["time"][...] = [st.to_lcr(k * st.frame_every * st.dt) for k in range(nf)]
             g["x"][...] = (np.arange(ns) + 0.5) / ns    # node s stands at the middle of its spacing
+        if S == 0:          # no snapshots asked for: no empty VTKHDF group either
+            return
         v = f.create_group("VTKHDF")
         v.attrs["Version"] = np.array([2, 2], np.int64)
         v.attrs["Type"] = np.bytes_(b"UnstructuredGrid")
