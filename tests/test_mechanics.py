@@ -53,26 +53,30 @@ def _staggered_energy(sim, u_new, u_old):
 
 @pytest.mark.parametrize("zeta", [0.0, 0.05])
 def test_energy_balance(zeta):
-    """zeta = 0: energy drifts by < 1e-6 over 1e4 steps with a suddenly applied load.
-    zeta > 0: energy lost equals the damping work, sum zeta |u(n+1) - u(n-1)|^2 / (4 dt)."""
+    """zeta = 0: energy drifts by < 1e-6 (relative) over 1e4 steps, from a random
+    initial strain with a suddenly applied load and no breaking.
+    zeta > 0: the energy lost equals the damping work, sum zeta |u(n+1) - u(n-1)|^2 / (4 dt)."""
     sim = simulation(SMALL, **{"drive.mode": "none", "load.ramp": 0.0, "load.settle": 0.0,
                                "interface.delta_b": 100.0, "time.zeta": zeta, "drive.duration": 1e-3,
                                "load.FN": 3.0})
     dt = sim.setup.dt
+    rng = np.random.default_rng(7)
+    free = sim.kind != FIXED
+    sim.u[free] = 0.02 * rng.standard_normal((free.sum(), 2))
+    sim.u_prev[:] = sim.u
     sim.step()
     h0 = _staggered_energy(sim, sim.u, sim.u_prev)
+    assert h0 > 0
     dissipated = 0.0
     for _ in range(10_000):
         older = sim.u_prev.copy()
         sim.step()
         dissipated += zeta * np.sum((sim.u - older) ** 2) / (4 * dt)
     h1 = _staggered_energy(sim, sim.u, sim.u_prev)
-    scale = abs(h0) + 0.5 * np.sum(((sim.u - sim.u_prev) / dt) ** 2)
-    assert abs(h1 + dissipated - h0) / scale < 1e-6
+    assert abs(h1 + dissipated - h0) / h0 < 1e-6
     assert sim.counters[0] == 0
-    if zeta == 0.0:
-        # The plain energy (central velocity, V at the step) stays close too: no drift.
-        assert np.abs(sim.u).max() > 1e-3          # it really moved
+    if zeta > 0:
+        assert dissipated > 0.1 * h0               # damping really acted
 
 
 def _free_block_run(factor, steps):
