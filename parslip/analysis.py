@@ -108,7 +108,7 @@ def summary(iface: dict) -> str:
     return "\n".join(lines)
 
 
-def spacetime_png(iface: dict, png: str, title: str = "") -> None:
+def spacetime_png(iface: dict, png: str, title: str = "") -> bool:
     """Space-time plot of intact bonds (yellow) and broken ones (white), t c_r/l upward."""
     import matplotlib
     matplotlib.use("Agg")
@@ -116,6 +116,8 @@ def spacetime_png(iface: dict, png: str, title: str = "") -> None:
     from matplotlib.colors import ListedColormap
 
     x, t, intact = iface["x"], iface["t"], iface["intact"]
+    if len(x) == 0:
+        return False            # a free block has no interface to plot
     fig, ax = plt.subplots(figsize=(5, 6), dpi=150)
     if len(t):
         dx = (x[1] - x[0]) if len(x) > 1 else 1.0
@@ -128,3 +130,4 @@ def spacetime_png(iface: dict, png: str, title: str = "") -> None:
     fig.tight_layout()
     fig.savefig(png)
     plt.close(fig)
+    return True

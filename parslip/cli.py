@@ -143,9 +143,9 @@ def cmd_run(args) -> int:
     prov = comm.bcast({"git_commit": git_commit(), "scene_file": os.path.abspath(args.scene),
                        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                        "command": " ".join(sys.argv)} if rank == 0 else None, root=0)
+    writer = Output(out, sim, comm, prov)
     log.info(f"{args.scene}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
              f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {out}")
-    writer = Output(out, sim, comm, prov)
     prog = Progress(st, scene["output.progress_s"], enabled=(rank == 0 and not args.quiet))
     t0 = time.monotonic()
     try:
@@ -173,11 +173,12 @@ def cmd_run(args) -> int:
                  f"on {size} rank(s); {int(counts[0])} bond breaks, {int(counts[1])} re-formations")
         iface = analysis.load_interface(out)
         print(analysis.summary(iface))
-        if not args.no_png:
-            png = os.path.splitext(out)[0] + "_spacetime.png"
-            analysis.spacetime_png(iface, png, f"{os.path.basename(args.scene)}: {scene['drive.mode']}, "
-                                   f"v0/c_r = {scene['drive.v0']:g}")
+        png = os.path.splitext(out)[0] + "_spacetime.png"
+        if not args.no_png and analysis.spacetime_png(
+                iface, png, f"{os.path.basename(args.scene)}: {scene['drive.mode']}, v0/c_r = {scene['drive.v0']:g}"):
             log.info(f"wrote {out} and {png}")
+        else:
+            log.info(f"wrote {out}")
     return 0
 
 

@@ -139,8 +139,11 @@ def parse_set(item: str) -> tuple[str, Any]:
     try:
         value = tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
-        # A bare word is a string: --set drive.mode=pull
-        value = text
+        # Python spellings TOML refuses (.01, 5.), then a bare word as a string: drive.mode=pull
+        try:
+            value = float(text)
+        except ValueError:
+            value = text
     return name, value
 
 

@@ -8,7 +8,7 @@ its HALO: copies of the nodes of the LEFT neighbour, then of the RIGHT one.
 Halo reach, in columns beyond the slab edge:
 
     bulk rows                      1        (every bond spans at most one column)
-    top interface row              3        (claims of neighbouring free top nodes)
+    top interface row              4        (claims of neighbouring free top nodes, with margin)
     bottom interface row           W = ceil(slip_reach) + 6
 
 W follows the interface: a top node that has slid s columns bonds to a
@@ -35,7 +35,7 @@ SIDES = (LEFT, RIGHT)
 OWNED, HALO = "owned", "halo"
 
 BULK_REACH = 1
-TOP_SITE_REACH = 3
+TOP_SITE_REACH = 4
 
 
 def bottom_site_reach(slip_reach: float) -> int:

@@ -49,7 +49,7 @@ class Setup:
     n_settle: int
     n_drive: int
     frame_every: int
-    snapshot_every: int
+    snapshot_steps: tuple     # drive steps of the snapshots, first at 0, last at n_drive
     v0: float                # internal units
     slip_reach: float        # a
 
@@ -67,10 +67,10 @@ class Setup:
 
     @property
     def n_snapshots(self) -> int:
-        return 0 if self.snapshot_every == 0 else self.n_drive // self.snapshot_every + 1
+        return len(self.snapshot_steps)
 
     def max_ranks(self) -> int:
-        reach = max(bottom_site_reach(self.slip_reach), TOP_SITE_REACH)
+        reach = max(bottom_site_reach(self.slip_reach) if self.lattice.has_interface else 1, TOP_SITE_REACH)
         return max_ranks(self.lattice, reach)
 
     def to_lcr(self, t_internal: float) -> float:
@@ -101,14 +101,14 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     frame_dt = scene["output.interface_dt"] * t_unit if scene["output.interface_dt"] > 0 else 1.0 / mat.c_r
     frame_every = max(1, int(math.floor(frame_dt / dt + 1e-9)))
     nsnap = scene["output.snapshots"]
-    snapshot_every = 0 if nsnap == 0 else max(1, n_drive // nsnap)
+    snaps = () if nsnap == 0 else tuple(sorted({int(round(j * n_drive / nsnap)) for j in range(nsnap + 1)}))
     v0 = scene["drive.v0"] * mat.c_r
     reach = scene["interface.slip_reach"]
     if reach == 0:
         reach = (v0 * scene["drive.duration"] * t_unit if scene["drive.mode"] != "none" else 0.0) + 2.0
     return Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                  dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
-                 n_drive=n_drive, frame_every=frame_every, snapshot_every=snapshot_every, v0=v0,
+                 n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
                  slip_reach=reach)
 
 
@@ -164,6 +164,7 @@ class Simulation:
         self.own_bottom_sites = self.bot_node[self.bot_node < n_own]
 
         self.n = 0
+        self._snap_index = {k: j for j, k in enumerate(setup.snapshot_steps)}
         self.first_bad = None      # (step, local index) of the first non-finite update here
         p = s
         self.delta0, self.delta_b = p["interface.delta0"], p["interface.delta_b"]
@@ -199,7 +200,7 @@ class Simulation:
         if bad >= 0 and self.first_bad is None:
             self.first_bad = (n + 1, bad)
         self.ex.forward(lay.node_channel, self.u)
-        if len(self.top_node):
+        if st.lattice.has_interface:     # global, not local: a rank with no top sites still serves its neighbours
             self.ex.forward(lay.top_channel, self.partner, self.x0)
         self.n = n + 1
 
@@ -293,5 +294,6 @@ class Simulation:
         t = st.to_lcr(k * st.dt)
         if k % st.frame_every == 0 and k // st.frame_every < st.n_frames:
             writer.interface_frame(k // st.frame_every, t, *self.interface_state())
-        if st.snapshot_every and k % st.snapshot_every == 0 and k // st.snapshot_every < st.n_snapshots:
-            writer.snapshot(k // st.snapshot_every, t, *self.node_fields(), self.partner[self.own_sites])
+        j = self._snap_index.get(k)
+        if j is not None:
+            writer.snapshot(j, t, *self.node_fields(), self.partner[self.own_sites])

@@ -31,7 +31,7 @@ import h5py
 import numpy as np
 
 from . import __version__
-from .config import to_toml
+from .config import ConfigError, to_toml
 from .lattice import BOTTOM
 
 VTK_LINE = 3
@@ -41,6 +41,11 @@ def git_commit() -> str:
     """The commit of the parslip checkout, with '-dirty' for local changes; 'unknown' outside git."""
     here = os.path.dirname(os.path.abspath(__file__))
     try:
+        top = subprocess.run(["git", "rev-parse", "--show-toplevel"], cwd=here, capture_output=True, text=True,
+                             timeout=5).stdout.strip()
+        # Only parslip's own checkout counts, not a repository it happens to be installed inside.
+        if not top or not os.path.samefile(os.path.join(top, "parslip"), here):
+            return "unknown"
         rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
                              timeout=5).stdout.strip()
         if not rev:
@@ -48,7 +53,7 @@ def git_commit() -> str:
         dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
                                capture_output=True, text=True, timeout=5).stdout.strip()
         return rev + ("-dirty" if dirty else "")
-    except (OSError, subprocess.SubprocessError):
+    except (OSError, subprocess.SubprocessError, ValueError):
         return "unknown"
 
 
@@ -66,10 +71,7 @@ class Output:
         self.size = lay.size
         self.mode = hdf5_mode(self.size)
         self.root = self.rank == 0
-        if self.mode == "mpio":
-            self.f = h5py.File(path, "w", driver="mpio", comm=comm)
-        else:
-            self.f = h5py.File(path, "w") if self.root else None
+        self.f = self._open(path, comm)
 
         # My slices of the global arrays.
         self.node0 = int(lay.nodes["gid"][0]) if lay.n_owned else 0
@@ -90,6 +92,26 @@ class Output:
         self._create(st, provenance or {})
 
     # ------------------------------------------------------------ plumbing --
+    def _open(self, path, comm):
+        """Open for writing; a file that cannot be opened is bad input on every rank."""
+        err, f = None, None
+        try:
+            if self.mode == "mpio":
+                f = h5py.File(path, "w", driver="mpio", comm=comm)
+            elif self.root:
+                f = h5py.File(path, "w")
+        except OSError as e:
+            err = f"--out {path!r}: cannot open for writing ({e.__class__.__name__}: {e}); " \
+                  "accepted: a writable path not held open by another program"
+        if self.size > 1:
+            errs = [m for m in comm.allgather(err) if m]
+            err = errs[0] if errs else None
+        if err:
+            if f is not None:
+                f.close()
+            raise ConfigError(err)
+        return f
+
     def _allgather(self, x):
         return [x] if self.comm is None or self.size == 1 else self.comm.allgather(x)
 

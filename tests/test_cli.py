@@ -43,6 +43,8 @@ CASES = [
     (["--set", "time.dt=1.0"], ["time.dt", "1.0", "above the stability limit", "accepted"]),
     (["--set", "drive.mode=sideways"], ["drive.mode", "sideways", "'push'"]),
     (["--set", "novalue"], ["novalue", "key=value"]),
+    (["--set", "drive.v0=.01"], None),                                   # Python spelling of a number
+    (["--set", "lattice.bottom_rows=1"], ["lattice.bottom_rows", "1", "or 0 for a free block"]),
 ]
 
 
@@ -112,3 +114,35 @@ def test_console_script_exit_code_without_traceback(tmp_path):
     assert p.returncode == 2 and "Traceback" not in p.stderr
     assert p.stderr.strip().splitlines() == [f"parslip: error: scene '{tmp_path / 'missing.toml'}': no such file; "
                                              "accepted: a TOML scene such as run/push.toml"]
+
+
+def test_output_held_open_elsewhere_is_bad_input(capsys, tmp_path, push):
+    import h5py
+    out = tmp_path / "held.vtkhdf"
+    with h5py.File(out, "w"):
+        pass
+    with h5py.File(out, "r"):                # e.g. open in ParaView
+        code, _, err = _run(capsys, "run", push, "--out", str(out), "--overwrite", "--set", "drive.duration=0.1")
+    assert code == 2 and "cannot open for writing" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_free_block_runs_and_reports_its_own_rank_limit(capsys, tmp_path, push):
+    code, out, _ = _run(capsys, "info", push, "--set", "lattice.bottom_rows=0")
+    assert code == 0 and "ranks            1 to 25" in out          # 100 columns, 4-column slabs
+    code, _, err = _run(capsys, "run", push, "--out", str(tmp_path / "free.vtkhdf"), "--set", "lattice.bottom_rows=0",
+                        "--set", "drive.duration=0.2", "--quiet")
+    assert code == 0, err
+    assert not (tmp_path / "free_spacetime.png").exists()
+
+
+def test_snapshot_count_is_as_asked(tmp_path, push):
+    import h5py
+    for dur in (0.05, 0.5):
+        out = tmp_path / f"s{dur}.vtkhdf"
+        assert main(["run", push, "--out", str(out), "--quiet", "--no-png", "--set", f"drive.duration={dur}",
+                     "--set", "output.snapshots=20"]) == 0
+        with h5py.File(out, "r") as f:
+            assert f["VTKHDF/Steps"].attrs["NSteps"] == 21
+            vals = f["VTKHDF/Steps/Values"][...]
+            assert vals[0] == 0.0 and vals[-1] == pytest.approx(dur, abs=0.01)

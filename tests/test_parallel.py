@@ -89,6 +89,30 @@ def _datasets(path):
 
 
 @pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
+def test_output_bitwise_identical_with_ranks_that_hold_no_interface(tmp_path):
+    """The substrate overhangs the block 2:1 on each side, so on 3 ranks the outer
+    slabs hold no top node: they must still take part in every exchange."""
+    over = {"lattice.top_cols": 12, "lattice.bottom_cols": 100, "drive.v0": 0.02, "drive.duration": 4.0}
+    sc = tmp_path / "overhang.toml"
+    sc.write_text(small_toml(**over))
+    from parslip.engine import derive as _derive
+    st = _derive(scene(**{**SMALL, **over}))
+    bounds = partition(st.lattice.col_count, 3, max(bottom_site_reach(st.slip_reach), 4))
+    # Not even a halo copy of a top node on the outer ranks (the top row's halo reaches 4 columns).
+    assert bounds[1] <= st.lattice.top.col0 - 4 and bounds[2] >= st.lattice.top.col0 + 12 + 4
+    files = {}
+    for n in (1, 3):
+        out = tmp_path / f"o{n}.vtkhdf"
+        p = subprocess.run([MPIEXEC, "-n", str(n), sys.executable, "-m", "parslip", "run", str(sc), "--out",
+                            str(out), "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        files[n] = _datasets(out)[0]
+    assert (files[1]["interface/intact"] == 0).any()
+    for name, ref in files[1].items():
+        assert files[3][name].tobytes() == ref.tobytes(), name
+
+
+@pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
 def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
     sc = tmp_path / "small.toml"
     sc.write_text(small_toml())
@@ -115,7 +139,7 @@ def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
     intact, partner = ref["interface/intact"], ref["interface/partner"]
     crossed = {}
     for n in (2, 3):
-        reach = max(bottom_site_reach(0.02 * 6.0 * 24 + 2.0), 3)
+        reach = max(bottom_site_reach(0.02 * 6.0 * 24 + 2.0), 4)
         bounds = partition(lat.col_count, n, reach)
         owner = lambda col: np.searchsorted(bounds, col, side="right") - 1   # noqa: E731
         top_owner = owner(lat.top.col0 + np.arange(lat.top.cols))
