@@ -80,6 +80,12 @@ def test_parallel_state_matches_serial_by_global_id():
 
 
 
+def _mpirun(n, scene_file, out):
+    """The real command line on n ranks; returns the finished process."""
+    return subprocess.run([MPIEXEC, "-n", str(n), sys.executable, "-m", "parslip", "run", str(scene_file),
+                           "--out", str(out), "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+
+
 def _datasets(path):
     out = {}
     with h5py.File(path, "r") as f:
@@ -103,8 +109,7 @@ def test_output_bitwise_identical_with_ranks_that_hold_no_interface(tmp_path):
     files = {}
     for n in (1, 3):
         out = tmp_path / f"o{n}.vtkhdf"
-        p = subprocess.run([MPIEXEC, "-n", str(n), sys.executable, "-m", "parslip", "run", str(sc), "--out",
-                            str(out), "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+        p = _mpirun(n, sc, out)
         assert p.returncode == 0, p.stderr
         files[n] = _datasets(out)[0]
     assert (files[1]["interface/intact"] == 0).any()
@@ -119,9 +124,7 @@ def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
     files = {}
     for n in (1, 2, 3):
         out = tmp_path / f"r{n}.vtkhdf"
-        cmd = [MPIEXEC, "-n", str(n), sys.executable, "-m", "parslip", "run", str(sc), "--out", str(out),
-               "--no-png", "--quiet"]
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+        p = _mpirun(n, sc, out)
         assert p.returncode == 0, p.stderr
         files[n] = _datasets(out)
     ref, ref_attrs = files[1]
@@ -159,8 +162,7 @@ def test_collective_mpio_output_matches_serial(tmp_path):
     files = {}
     for n in (1, 2):
         out = tmp_path / f"r{n}.vtkhdf"
-        p = subprocess.run([MPIEXEC, "-n", str(n), sys.executable, "-m", "parslip", "run", str(sc), "--out",
-                            str(out), "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+        p = _mpirun(n, sc, out)
         assert p.returncode == 0, p.stderr
         files[n] = _datasets(out)
     assert files[2][1]["hdf5_mode"] == "mpio"
@@ -174,8 +176,7 @@ def test_slip_beyond_the_halo_stops_the_run(tmp_path):
     sc = tmp_path / "small.toml"
     sc.write_text(small_toml(**{"interface.slip_reach": 0.2}))
     out = tmp_path / "o.vtkhdf"
-    p = subprocess.run([MPIEXEC, "-n", "2", sys.executable, "-m", "parslip", "run", str(sc), "--out", str(out),
-                        "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+    p = _mpirun(2, sc, out)
     assert p.returncode == 3, p.stderr
     assert "interface.slip_reach" in p.stderr and "Traceback" not in p.stderr
     with h5py.File(out, "r") as f:
