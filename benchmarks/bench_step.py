@@ -12,9 +12,10 @@ import argparse
 import resource
 import time
 
-from parslip.config import resolve
-from parslip.decomposition import SlabExchanger
-from parslip.engine import Simulation, derive
+from parslip.scene.load import resolve
+from parslip.parallel.decomposition import SlabExchanger
+from parslip.engine.simulation import Simulation
+from parslip.scene.derive import derive
 
 
 def main():

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from parslip.config import resolve
-from parslip.engine import Simulation, derive
+from parslip.scene.load import resolve
+from parslip.engine.simulation import Simulation
+from parslip.scene.derive import derive
 
 # A free block at rest: no substrate, no load, no drive, no damping.
 FREE_BLOCK = {"lattice.bottom_rows": 0, "drive.mode": "none", "load.ramp": 0.0, "load.settle": 0.0,
@@ -18,7 +19,7 @@ SMALL = {"lattice.top_rows": 4, "lattice.top_cols": 24, "lattice.bottom_rows": 4
 
 def small_toml(**kw) -> str:
     """SMALL (plus overrides) as scene-file text, for tests that go through the command line."""
-    from parslip.config import to_toml
+    from parslip.scene.schema import to_toml
     over = dict(SMALL)
     over.update(kw)
     return to_toml(over)

@@ -3,9 +3,10 @@ import numpy as np
 import pytest
 
 from helpers import SMALL, simulation
-from parslip.config import ConfigError
-from parslip.engine import NonFiniteError, derive
-from parslip.lattice import FIXED
+from parslip.errors import ConfigError
+from parslip.errors import NonFiniteError
+from parslip.scene.derive import derive
+from parslip.model.lattice import FIXED
 from helpers import scene
 
 
@@ -29,7 +30,7 @@ def test_static_compression_gap_and_reaction():
     assert np.all(gap < 0.5)                                             # every bond compressed
     # Reaction of the fixed row = minus the bond force on it.
     f = np.zeros_like(sim.u)
-    from parslip import kernels
+    from parslip.engine import kernels
     kernels.bulk_forces(sim.u, sim.nb, sim.block, sim.kn, sim.kt, sim.dirs, sim.n_owned, f)
     fixed = sim.kind[:sim.n_owned] == FIXED
     assert -f[:sim.n_owned][fixed, 1].sum() == pytest.approx(FN, rel=1e-9)

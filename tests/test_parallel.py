@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 
 from helpers import SMALL, scene, small_toml
-from parslip.decomposition import LEFT, RIGHT, SlabExchanger, build_layout, partition, bottom_site_reach
-from parslip.engine import Simulation, derive
-from parslip.lattice import Lattice
+from parslip.parallel.decomposition import LEFT, RIGHT, SlabExchanger, build_layout, partition, bottom_site_reach
+from parslip.engine.simulation import Simulation
+from parslip.scene.derive import derive
+from parslip.model.lattice import Lattice
 
 MPIEXEC = shutil.which("mpiexec")
 
@@ -101,7 +102,7 @@ def test_output_bitwise_identical_with_ranks_that_hold_no_interface(tmp_path):
     over = {"lattice.top_cols": 12, "lattice.bottom_cols": 100, "drive.v0": 0.02, "drive.duration": 4.0}
     sc = tmp_path / "overhang.toml"
     sc.write_text(small_toml(**over))
-    from parslip.engine import derive as _derive
+    from parslip.scene.derive import derive as _derive
     st = _derive(scene(**{**SMALL, **over}))
     bounds = partition(st.lattice.col_count, 3, max(bottom_site_reach(st.slip_reach), 4))
     # Not even a halo copy of a top node on the outer ranks (the top row's halo reaches 4 columns).

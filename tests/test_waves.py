@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from helpers import FREE_BLOCK, row_nodes, set_field, simulation
-from parslip.physics import (Material, born_stiffness, born_surface_ratio, born_wave_speeds, cl_over_cs,
+from parslip.model.physics import (Material, born_stiffness, born_surface_ratio, born_wave_speeds, cl_over_cs,
                              rayleigh_ratio)
 
 

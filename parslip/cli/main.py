@@ -17,10 +17,9 @@ import os
 import sys
 import time
 
-from .config import ConfigError, describe_keys, load_scene_file, parse_set, resolve
-
-EXIT_BAD_INPUT = 2
-EXIT_RUN_FAILED = 3
+from ..errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, ConfigError
+from ..scene.load import load_scene_file, parse_set, resolve
+from ..scene.schema import describe_keys
 
 UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_s of the top
 block (or c_r with material.velocity_unit = "c_r"); scene times, like the
@@ -92,7 +91,7 @@ def _out_path(args) -> str:
 
 
 def cmd_info(args) -> int:
-    from .engine import derive
+    from ..scene.derive import derive
     scene = load(args.scene, args.set)
     st = derive(scene)
     lat, mat = st.lattice, st.material
@@ -125,10 +124,12 @@ def cmd_info(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from . import analysis
-    from .decomposition import SlabExchanger
-    from .engine import NonFiniteError, SlipReachError, Simulation, derive
-    from .output import Output, git_commit
+    from .. import analysis
+    from ..engine.simulation import Simulation
+    from ..errors import RunError
+    from ..io.output import Output, git_commit
+    from ..parallel.decomposition import SlabExchanger
+    from ..scene.derive import derive
     from .progress import Progress, setup_logging
 
     comm = _comm()
@@ -150,7 +151,7 @@ def cmd_run(args) -> int:
     t0 = time.monotonic()
     try:
         sim.run(writer, prog)
-    except (NonFiniteError, SlipReachError) as e:
+    except RunError as e:
         writer.close(status=f"failed: {e}")
         prog.done()
         if rank == 0:

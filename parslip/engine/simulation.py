@@ -1,115 +1,21 @@
-"""The simulation: a scene's derived set-up, the local state and the time loop.
+"""One rank's state and the time loop that advances it.
 
-Responsible for turning a resolved scene into numbers (``Setup``), building
-one rank's arrays from the decomposition (``Simulation``), and running the
-load phases: ramp F_N, settle, drive.  The time loop is the same on one rank
-and on many: it calls compiled kernels, then the exchanger it was given.
+Responsible for building one rank's arrays from the decomposition
+(``Simulation``) and running the load phases: ramp F_N, settle, drive.  The
+time loop is the same on one rank and on many: it calls compiled kernels,
+then the exchanger it was given.
 
 Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
 """
 from __future__ import annotations
 
-import math
-import time
-from dataclasses import dataclass
-
 import numpy as np
 
 from . import kernels
-from .config import ConfigError
-from .decomposition import OWNED, NullExchanger, build_layout, max_ranks, bottom_site_reach, TOP_SITE_REACH
-from .lattice import DIRECTIONS, DRIVEN, FIXED, TOP, Lattice
-from .physics import Material
-from .stability import dt_max as _dt_max
-from .stability import omega_max as _omega_max
-
-
-class NonFiniteError(RuntimeError):
-    """The state stopped being finite; the message gives the step and the node."""
-
-
-class SlipReachError(RuntimeError):
-    """The interface slid further than the MPI halo reaches."""
-
-
-@dataclass
-class Setup:
-    """Everything a scene implies, before any rank builds arrays."""
-    scene: dict
-    material: Material
-    lattice: Lattice
-    l: float                 # contact length, a
-    t_unit: float            # l/c_r in internal time
-    omega_max: float
-    omega_method: str        # "lanczos" (exact) or "bound" (rigorous upper bound)
-    dt_limit: float          # 2/omega_max
-    dt_paper: float          # a/c_l of the top block (the paper's criterion)
-    dt: float
-    n_ramp: int
-    n_settle: int
-    n_drive: int
-    frame_every: int
-    snapshot_steps: tuple     # drive steps of the snapshots, first at 0, last at n_drive
-    v0: float                # internal units
-    slip_reach: float        # a
-
-    @property
-    def n_steps(self) -> int:
-        return self.n_ramp + self.n_settle + self.n_drive
-
-    @property
-    def n_drive_start(self) -> int:
-        return self.n_ramp + self.n_settle
-
-    @property
-    def n_frames(self) -> int:
-        return self.n_drive // self.frame_every + 1
-
-    @property
-    def n_snapshots(self) -> int:
-        return len(self.snapshot_steps)
-
-    def max_ranks(self) -> int:
-        reach = max(bottom_site_reach(self.slip_reach) if self.lattice.has_interface else 1, TOP_SITE_REACH)
-        return max_ranks(self.lattice, reach)
-
-    def to_lcr(self, t_internal: float) -> float:
-        return t_internal / self.t_unit
-
-
-def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
-    """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt."""
-    mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
-                              scene["material.bottom_kn"], scene["material.bottom_kt"])
-    lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
-                  scene["lattice.bottom_cols"], scene["interface.delta0"])
-    if omega is None:
-        omega, method = _omega_max(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                           scene["interface.kx"], scene["interface.ky"])
-    else:
-        omega, method = omega
-    limit = _dt_max(omega)
-    dt = scene["time.dt"] if scene["time.dt"] > 0 else scene["time.safety"] * limit
-    if dt >= limit:
-        raise ConfigError(f"time.dt = {scene['time.dt']!r}: above the stability limit 2/omega_max = {limit:.6g} a/c "
-                          f"(omega_max = {omega:.6g}); accepted: 0 (auto) or 0 < dt < {limit:.6g}")
-    l = lat.contact_length
-    t_unit = l / mat.c_r
-    n_ramp = int(round(scene["load.ramp"] * t_unit / dt))
-    n_settle = int(round(scene["load.settle"] * t_unit / dt))
-    n_drive = max(1, int(math.ceil(scene["drive.duration"] * t_unit / dt)))
-    frame_dt = scene["output.interface_dt"] * t_unit if scene["output.interface_dt"] > 0 else 1.0 / mat.c_r
-    frame_every = max(1, int(math.floor(frame_dt / dt + 1e-9)))
-    nsnap = scene["output.snapshots"]
-    snaps = () if nsnap == 0 else tuple(sorted({int(round(j * n_drive / nsnap)) for j in range(nsnap + 1)}))
-    v0 = scene["drive.v0"] * mat.c_r
-    reach = scene["interface.slip_reach"]
-    if reach == 0:
-        reach = (v0 * scene["drive.duration"] * t_unit if scene["drive.mode"] != "none" else 0.0) + 2.0
-    return Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
-                 dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
-                 n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
-                 slip_reach=reach)
+from ..errors import NonFiniteError, SlipReachError
+from ..model.lattice import DIRECTIONS, TOP
+from ..parallel.decomposition import NullExchanger, build_layout
+from ..scene.derive import Setup
 
 
 class Simulation:

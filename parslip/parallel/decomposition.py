@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .config import ConfigError
-from .lattice import Lattice
+from ..errors import ConfigError
+from ..model.lattice import Lattice
 
 LEFT, RIGHT = 0, 1
 SIDES = (LEFT, RIGHT)

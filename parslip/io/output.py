@@ -30,16 +30,17 @@ import subprocess
 import h5py
 import numpy as np
 
-from . import __version__
-from .config import ConfigError, to_toml
-from .lattice import BOTTOM
+from .. import __version__
+from ..errors import ConfigError
+from ..model.lattice import BOTTOM
+from ..scene.schema import to_toml
 
 VTK_LINE = 3
 
 
 def git_commit() -> str:
     """The commit of the parslip checkout, with '-dirty' for local changes; 'unknown' outside git."""
-    here = os.path.dirname(os.path.abspath(__file__))
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     try:
         top = subprocess.run(["git", "rev-parse", "--show-toplevel"], cwd=here, capture_output=True, text=True,
                              timeout=5).stdout.strip()

@@ -1,0 +1,30 @@
+"""The errors a run can end with, each carrying its exit code.
+
+The command line maps them to exit codes in one place (``cli.main``):
+bad input exits 2 with one line naming the key, the value and what is
+accepted; a run that failed on the way exits 3 with the step and the place.
+"""
+from __future__ import annotations
+
+EXIT_BAD_INPUT = 2
+EXIT_RUN_FAILED = 3
+
+
+class ConfigError(ValueError):
+    """Bad input (scene, override, output path, rank count, checkpoint): the message is the one line the user sees."""
+
+    exit_code = EXIT_BAD_INPUT
+
+
+class RunError(RuntimeError):
+    """A run that failed on the way; the message says the step, the place and the likely cause."""
+
+    exit_code = EXIT_RUN_FAILED
+
+
+class NonFiniteError(RunError):
+    """The state stopped being finite, or grew without bound."""
+
+
+class SlipReachError(RunError):
+    """The interface slid further than the MPI halo reaches."""

@@ -1,0 +1,107 @@
+"""Reading a scene: TOML file, then ``--set key=value`` overrides, then checks.
+
+``resolve`` turns the file plus overrides into a flat, validated dict; any
+bad value raises ``ConfigError`` with one line naming the key, the value and
+what is accepted.  The CLI turns that into exit code 2.
+"""
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from ..errors import ConfigError
+from ..model.physics import max_nu
+from .schema import SCHEMA
+
+
+def _flatten(tree: dict, prefix: str = "") -> dict[str, Any]:
+    out = {}
+    for k, v in tree.items():
+        name = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, name + "."))
+        else:
+            out[name] = v
+    return out
+
+
+def _typed(name: str, value: Any) -> Any:
+    key = SCHEMA[name]
+    if key.kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, key.kind) or (key.kind is int and isinstance(value, bool)):
+        kind = {float: "a number", int: "an integer", str: "a string", bool: "true or false"}[key.kind]
+        raise ConfigError(f"{name} = {value!r}: expected {kind}"
+                          f"{'' if key.units == '-' else f' in {key.units}'}; accepted: {key.accepted}")
+    return value
+
+
+def parse_set(item: str) -> tuple[str, Any]:
+    """Parse one ``--set key=value``; the value is a TOML literal."""
+    if "=" not in item:
+        raise ConfigError(f"--set {item!r}: expected key=value, e.g. drive.v0=1e-3")
+    name, text = (s.strip() for s in item.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        # Python spellings TOML refuses (.01, 5.), then a bare word as a string: drive.mode=pull
+        try:
+            value = float(text)
+        except ValueError:
+            value = text
+    return name, value
+
+
+def load_scene_file(path: str) -> dict[str, Any]:
+    try:
+        with open(path, "rb") as f:
+            return _flatten(tomllib.load(f))
+    except FileNotFoundError:
+        raise ConfigError(f"scene {path!r}: no such file; accepted: a TOML scene such as run/push.toml") from None
+    except IsADirectoryError:
+        raise ConfigError(f"scene {path!r}: is a directory; accepted: a TOML scene file") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"scene {path!r}: malformed TOML ({e}); accepted: a TOML scene file") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"scene {path!r}: not UTF-8 text; accepted: a TOML scene file") from None
+
+
+def resolve(raw: dict[str, Any], overrides: list[tuple[str, Any]] = ()) -> dict[str, Any]:
+    """Defaults, then the scene, then overrides; every value checked."""
+    flat = dict(raw)
+    for name, value in overrides:
+        flat[name] = value
+    scene = {}
+    for name, value in flat.items():
+        if name not in SCHEMA:
+            near = [k for k in SCHEMA if k.split(".")[-1] == name.split(".")[-1]]
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            raise ConfigError(f"{name} = {value!r}: unknown key{hint}; accepted keys: "
+                              + ", ".join(SCHEMA))
+        scene[name] = _typed(name, value)
+    for name, key in SCHEMA.items():
+        scene.setdefault(name, key.default)
+        if not key.check(scene[name]):
+            unit = "" if key.units == "-" else f" (in {key.units})"
+            raise ConfigError(f"{name} = {scene[name]!r}: out of range{unit}; accepted: {key.accepted}")
+    _cross_checks(scene)
+    return scene
+
+
+def _cross_checks(s: dict[str, Any]) -> None:
+    if s["interface.delta_b"] <= s["interface.delta0"]:
+        raise ConfigError(f"interface.delta_b = {s['interface.delta_b']!r}: must exceed interface.delta0 = "
+                          f"{s['interface.delta0']!r}; accepted: delta_b > delta0 (in a)")
+    nu_hi = max_nu(s["material.model"])
+    if s["material.nu"] > nu_hi:
+        raise ConfigError(f"material.nu = {s['material.nu']!r}: gives k_t < 0 in {s['material.model']}; "
+                          f"accepted: -1 < nu <= {nu_hi:.4g}")
+    if s["lattice.bottom_rows"] and s["lattice.bottom_cols"] < s["lattice.top_cols"] or (
+            s["lattice.bottom_rows"] and (s["lattice.bottom_cols"] - s["lattice.top_cols"]) % 2):
+        raise ConfigError(f"lattice.bottom_cols = {s['lattice.bottom_cols']!r}: the top block (top_cols = "
+                          f"{s['lattice.top_cols']}) must centre on it; accepted: >= top_cols with the same parity")
