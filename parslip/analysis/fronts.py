@@ -11,16 +11,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import h5py
 import numpy as np
+
+from ..io.contract import read_interface
 
 
 def load_interface(path: str) -> dict:
-    with h5py.File(path, "r") as f:
-        g = f["interface"]
-        n = int(g.attrs.get("frames_written", g["time"].shape[0]))
-        return {"x": g["x"][...], "t": g["time"][:n], "intact": g["intact"][:n],
-                "ux": g["ux"][:n], "uy": g["uy"][:n], "partner": g["partner"][:n]}
+    """The interface record (``io.contract.read_interface``): x, t, intact, partner, ux, uy, sxy, syy."""
+    return read_interface(path)
 
 
 def first_break(iface: dict):

@@ -13,6 +13,7 @@ broadcasts the decision; every rank then takes the same branch.
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
 import time
@@ -25,6 +26,12 @@ UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_s
 block (or c_r with material.velocity_unit = "c_r"); scene times, like the
 output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
 `parslip keys` lists every scene key with its default, units and range."""
+
+
+# Further subcommands live in their own modules: each has ``register(sub)``,
+# which adds its parser with ``set_defaults(func=...)``; ``func(args)`` returns
+# the exit code.  Their heavy imports stay inside ``func``.
+COMMAND_MODULES = ("parslip.cli.analysis_cmds", "parslip.cli.viz_cmds")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -46,6 +53,8 @@ def _parser() -> argparse.ArgumentParser:
     i.add_argument("scene")
     i.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     sub.add_parser("keys", help="every scene key with default, units and accepted range")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
     return p
 
 
@@ -205,7 +214,9 @@ def _main(args) -> int:
             return 0
         if args.cmd == "info":
             return cmd_info(args)
-        return cmd_run(args)
+        if args.cmd == "run":
+            return cmd_run(args)
+        return args.func(args)
     except ConfigError as e:
         rank = 0
         if args.cmd == "run":

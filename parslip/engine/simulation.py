@@ -14,6 +14,7 @@ import numpy as np
 from . import kernels
 from ..errors import NonFiniteError, SlipReachError
 from ..model.lattice import DIRECTIONS, TOP
+from ..model.physics import DENSITY
 from ..parallel.decomposition import NullExchanger, build_layout
 from ..scene.derive import Setup
 
@@ -147,12 +148,21 @@ class Simulation:
 
     # ------------------------------------------------------------ fields ----
     def interface_state(self):
-        """Owned top sites: (intact uint8, ux/l, uy/l, partner) in global site order."""
+        """Owned top sites in global site order: intact (uint8), ux/l, uy/l, partner, and the
+        interface traction sxy = -f_x/(a rho c_r^2), syy = -f_y/(a rho c_r^2) of the bond's force f on the top node."""
         s = self.own_sites
         nodes = self.top_node[s]
         l = self.setup.l
-        return ((self.partner[s] >= 0).astype(np.uint8), self.u[nodes, 0] / l, self.u[nodes, 1] / l,
-                self.partner[s].astype(np.int32))
+        p = self.partner[s]
+        bonded = p >= 0
+        q = np.where(bonded, p - self.bot_g0, 0)
+        ib = self.bot_node[np.clip(q, 0, max(len(self.bot_node) - 1, 0))] if len(self.bot_node) else q
+        dx = (self.ref_x[nodes] - self.ref_x[ib]) + (self.u[nodes, 0] - self.u[ib, 0])
+        dy = self.delta0 + (self.u[nodes, 1] - self.u[ib, 1])
+        scale = 1.0 / (DENSITY * self.setup.material.c_r ** 2)
+        sxy = np.where(bonded, self.kx * (dx - self.x0[s]) * scale, 0.0)
+        syy = np.where(bonded, self.ky * (dy - self.delta0) * scale, 0.0)
+        return (bonded.astype(np.uint8), self.u[nodes, 0] / l, self.u[nodes, 1] / l, p.astype(np.int32), sxy, syy)
 
     def node_fields(self):
         """Owned nodes: positions (N,3), velocities (N,3), stress (N,3) in rho c_r^2."""

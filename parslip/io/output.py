@@ -1,18 +1,7 @@
 """The one HDF5 file a run writes: the interface record, snapshots, provenance.
 
-Responsible for the output contract that other tools read:
-
-  /interface/intact   uint8   [frames, sites]  1 where the top node's bond is intact
-  /interface/partner  int32   [frames, sites]  bottom site it is bonded to, -1 if broken
-  /interface/time     float64 [frames]         t, in l/c_r from the start of the drive
-  /interface/x        float64 [sites]          reference x, in l: 0 rear edge, 1 front edge
-  /interface/ux, uy   float64 [frames, sites]  displacement of the top interface nodes, in l
-  /VTKHDF                                      transient VTKHDF UnstructuredGrid (ParaView,
-                                               pyvista): node positions (a), velocity (c),
-                                               stress sxx, syy, sxy (rho c_r^2), bonds as
-                                               line cells with "interface" and "intact"
-  root attributes                              resolved scene (TOML), version, git commit,
-                                               dt, omega_max, wave speeds, sizes, rank count
+Responsible for writing the output contract of ``io.contract`` (read its
+docstring for the datasets and their units).
 
 Sites are ordered by x.  Every dataset has a fixed size known at the start,
 and each rank's share of it is one contiguous slice (global ids run column
@@ -34,6 +23,7 @@ from .. import __version__
 from ..errors import ConfigError
 from ..model.lattice import BOTTOM
 from ..scene.schema import to_toml
+from .contract import FRAME_FIELDS, INTERFACE_DATASETS
 
 VTK_LINE = 3
 
@@ -162,10 +152,8 @@ class Output:
         g = f.create_group("interface")
         g.attrs["frame_every_steps"] = st.frame_every
         g.attrs["frames_written"] = 0
-        for name, dt_, shape, unit in (("intact", np.uint8, (nf, ns), "1 = bond intact"),
-                                       ("partner", np.int32, (nf, ns), "bottom site index, -1 = broken"),
-                                       ("ux", np.float64, (nf, ns), "l"), ("uy", np.float64, (nf, ns), "l"),
-                                       ("time", np.float64, (nf,), "l/c_r"), ("x", np.float64, (ns,), "l")):
+        for name, (dt_, per_frame, unit) in INTERFACE_DATASETS.items():
+            shape = (nf, ns) if per_frame else ((nf,) if name == "time" else (ns,))
             ds = g.create_dataset(name, shape=shape, dtype=dt_,
                                   chunks=(max(1, min(nf, (1 << 16) // max(ns, 1))), ns)
                                   if len(shape) == 2 and ns else None)
@@ -219,12 +207,10 @@ class Output:
                 v["Types"][j * M:(j + 1) * M] = VTK_LINE
 
     # --------------------------------------------------------------- writes --
-    def interface_frame(self, k, t, intact, ux, uy, partner):
+    def interface_frame(self, k, t, intact, ux, uy, partner, sxy, syy):
         sl = (k, slice(self.site0, self.site0 + len(intact)))
-        self._put("interface/intact", sl, intact)
-        self._put("interface/partner", sl, partner)
-        self._put("interface/ux", sl, ux)
-        self._put("interface/uy", sl, uy)
+        for name, data in zip(FRAME_FIELDS, (intact, partner, ux, uy, sxy, syy)):
+            self._put(f"interface/{name}", sl, data)
         if self.f is not None:
             self.f["interface"].attrs["frames_written"] = k + 1
 

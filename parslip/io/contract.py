@@ -1,0 +1,60 @@
+"""The output contract: what a run file holds, in which units; one reader for analysis.
+
+The writer (``io.output``) creates exactly these datasets and the readers
+(``analysis``, ``parslip.open``, the figure code) read them through
+``read_interface`` here, so writer and reader cannot drift apart.
+
+  /interface/intact   uint8   [frames, sites]  1 where the top node's bond is intact
+  /interface/partner  int32   [frames, sites]  bottom site (substrate column) it is bonded to, -1 if broken
+  /interface/time     float64 [frames]         t, in l/c_r from the start of the drive
+  /interface/x        float64 [sites]          reference x, in l: 0 rear edge, 1 front edge
+  /interface/ux, uy   float64 [frames, sites]  displacement of the top interface nodes, in l
+  /interface/sxy, syy float64 [frames, sites]  interface traction on the block, as stress in rho c_r^2:
+                                               sxy = -f_x / (a rho c_r^2), syy = -f_y / (a rho c_r^2),
+                                               f the interface bond's force on the top node (0 if broken);
+                                               syy < 0 is compression
+  /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots
+  root attributes                              resolved scene (TOML), provenance, derived constants, status
+
+A frame at drive step k records the displacements u(k) and the bond state as
+it entered that step.  ``/interface`` attribute ``frames_written`` says how
+many frames are valid (a failed or interrupted run keeps what it wrote).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+INTERFACE = "interface"
+
+# name: (dtype, per-frame?, units)
+INTERFACE_DATASETS = {
+    "intact": (np.uint8, True, "1 = bond intact"),
+    "partner": (np.int32, True, "bottom site index, -1 = broken"),
+    "ux": (np.float64, True, "l"),
+    "uy": (np.float64, True, "l"),
+    "sxy": (np.float64, True, "rho c_r^2 (interface traction, -f_x/a)"),
+    "syy": (np.float64, True, "rho c_r^2 (interface traction, -f_y/a; < 0 compressive)"),
+    "time": (np.float64, False, "l/c_r"),
+    "x": (np.float64, False, "l"),
+}
+FRAME_FIELDS = ("intact", "partner", "ux", "uy", "sxy", "syy")
+
+
+def read_interface(path: str) -> dict:
+    """The interface record of a run file: every dataset above, cut to the frames written.
+
+    Returns a dict of numpy arrays keyed by dataset name (``t`` is an alias of
+    ``time``).  Datasets a file does not hold (older files have no tractions)
+    are left out.
+    """
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        g = f[INTERFACE]
+        n = int(g.attrs.get("frames_written", g["time"].shape[0]))
+        out = {}
+        for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
+            if name in g:
+                out[name] = g[name][:n] if per_frame or name == "time" else g[name][...]
+        out["t"] = out["time"]
+        return out
