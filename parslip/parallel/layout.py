@@ -1,0 +1,399 @@
+"""Who owns which columns, which halo copies each rank keeps, and what travels between ranks.
+
+Pure: no MPI, no numba.  Everything here can be tested by drawing it.
+
+The lattice is cut in x into slabs of whole global columns, balanced by an
+estimate of the time each column costs (``column_cost``).  Each block (the
+substrate, the sliding block) is stored per rank as 2D arrays [rows, columns]
+with rows along x; row r of block b keeps the columns
+
+    OWNED  [c0, c1) of the rank, clipped to the block, and
+    HALO   the columns within h(b, r) of the slab, clipped to the block,
+
+with h = 1 for bulk rows (a bond spans at most one column) and wider halos
+on the two interface rows (``Reach``): the sliding block's bottom row must
+see the substrate sites its nodes have slid over, and the substrate's top
+row the block's nodes slid over it.  A halo may reach past the neighbouring
+slab into slabs further away: the exchange plan lists every peer whose
+OWNED columns a rank keeps as HALO, not just its LEFT and RIGHT neighbours,
+so slabs may be narrower than the interface slip (multi-hop halos).
+
+What travels every step: the positions of the HALO copies, and the bond
+state of the HALO copies of the block's interface sites (interface bonds
+are owned by the rank that owns their top node).
+
+Arrays carry one ghost row above and below and one ghost column on each side
+(``PAD``), never written and zero: a node at a block's edge reads its missing
+neighbours there and weighs them by 0, so edges need no branches.  Task rows
+and columns, and exchange segments, are given as array indices (with the pad).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..model.lattice import BOTTOM, TOP, Lattice
+
+LEFT, RIGHT = 0, 1
+SIDES = (LEFT, RIGHT)
+OWNED, HALO = "owned", "halo"
+
+BULK_REACH = 1
+PAD = 1                 # ghost rows and columns around each block's arrays
+
+# How far a substrate interface site may drift from its reference column (a).
+# The re-bonding window and the halo widths assume it; the loop checks it.
+BOTTOM_DRIFT = 0.5
+
+# Row kinds of the schedule (the compiled loop has one loop per kind).
+FULL, NO_UP, NO_DOWN, MASKED = 0, 1, 2, 3
+# Extra per-column forces a row adds: none, the block's interface row, the substrate's interface row.
+EXTRA_NONE, EXTRA_TOP, EXTRA_BOTTOM = 0, 1, 2
+# Columns of a task row: block, row, first local column j0, node count n, row kind, bond mask (MASKED),
+# extra force, load (1: the normal load acts), drive (1: x prescribed once the drive runs), early (a peer
+# keeps these nodes), s (up/down neighbours of column c are c - 1 + s and c + s).
+TASK_FIELDS = ("block", "row", "j0", "n", "kind", "mask", "extra", "load", "drive", "early", "s")
+TASK_WIDTH = len(TASK_FIELDS)
+# Neighbour slots (bit k of a mask): 0 right, 1 up-right, 2 up-left, 3 left, 4 down-left, 5 down-right.
+ALL_BONDS = 0b111111
+
+# Measured cost of one column, in node updates (benchmarks/bench_loop.py):
+# a bulk node costs 1; each interface site adds the bond update and the
+# re-bonding logic, which costs about SITE_COST node updates per step.
+SITE_COST = 12.0
+
+
+@dataclass(frozen=True)
+class Reach:
+    """Halo widths in columns, from the interface geometry and the slip it must serve.
+
+    window = floor(delta0 + drift + 1/2): a free node at x re-bonds to a substrate
+        site q with |q + u_q - x| <= delta0, so |q - round(x)| <= window when
+        the substrate site has drifted at most ``drift`` from its column.
+    link = ceil(max(delta_b, window + 1/2) + drift): how far, in a, one top-bottom
+        interaction reaches (a bond breaks at length delta_b; a claim reaches
+        window + 1/2 from the node).
+    An exact bond update of a node needs the block's interface nodes within 4
+    links and the substrate sites within 3 links of it; a rank needs exact
+    updates for its own nodes and for the block's nodes bonded to its own
+    substrate sites (one more link).  Hence, with U the slip reach,
+        top_site    = ceil(U) + 5 link + 1   (the block's interface row)
+        bottom_site = ceil(U) + 4 link + 1   (the substrate's interface row).
+    The loop checks every step that the halo covers these distances in the
+    current (slid) positions, and stops the run if not.
+    """
+    slip: float
+    window: int
+    link: int
+    top_site: int
+    bottom_site: int
+    drift: float = BOTTOM_DRIFT
+
+    @property
+    def top_cover(self) -> int:
+        """Distance (a) beyond the rank's interest the block's interface row must cover."""
+        return 5 * self.link
+
+    @property
+    def bottom_cover(self) -> int:
+        return 4 * self.link
+
+
+def interface_reach(delta0: float, delta_b: float, slip: float, drift: float = BOTTOM_DRIFT) -> Reach:
+    window = int(math.floor(delta0 + drift + 0.5))
+    link = int(math.ceil(max(delta_b, window + 0.5) + drift))
+    u = int(math.ceil(slip))
+    return Reach(slip=slip, window=window, link=link, top_site=u + 5 * link + 1, bottom_site=u + 4 * link + 1,
+                 drift=drift)
+
+
+def column_cost(lattice: Lattice) -> np.ndarray:
+    """Estimated time per step of each global column, in node updates."""
+    cost = lattice.col_count.astype(float)
+    if lattice.has_interface:
+        t = lattice.top
+        cost[t.col0:t.col0 + t.cols] += SITE_COST
+    return cost
+
+
+def partition(col_cost: np.ndarray, nranks: int) -> np.ndarray | None:
+    """Column boundaries [b0 = 0, b1, ..., bP = ncols] balancing the cost per slab.
+
+    Boundary k is the column where the cumulative cost is nearest k/P of the
+    total, kept at least one column from its neighbours.  None when there are
+    fewer columns than ranks.
+    """
+    ncols = len(col_cost)
+    if nranks > ncols:
+        return None
+    cum = np.concatenate([[0.0], np.cumsum(col_cost)])
+    bounds = [0]
+    for k in range(1, nranks):
+        target = cum[-1] * k / nranks
+        c = int(np.searchsorted(cum, target, side="left"))
+        if c > 0 and target - cum[c - 1] < cum[c] - target:
+            c -= 1
+        c = max(c, bounds[-1] + 1)
+        c = min(c, ncols - (nranks - k))
+        bounds.append(c)
+    bounds.append(ncols)
+    return np.array(bounds, np.int64)
+
+
+def _clip(lo: int, hi: int, b0: int, b1: int) -> tuple[int, int]:
+    lo, hi = max(lo, b0), min(hi, b1)
+    return (lo, hi) if hi > lo else (b0, b0)
+
+
+@dataclass
+class BlockLayout:
+    """One block on one rank: rows x columns stored, which of them are OWNED, per row."""
+    rows: int
+    span: tuple                 # global columns [bc0, bc1) of the block
+    base: int                   # global column of array column 0 (a ghost column)
+    width: int                  # array columns: the stored ones and a ghost column on each side
+    owned: np.ndarray           # [rows, 2] global [lo, hi) owned per row (lo == hi: none)
+    stored: np.ndarray          # [rows, 2] global [lo, hi) stored per row
+    integrated: np.ndarray      # [rows] bool: rows the loop advances (not fixed rows)
+    parity: int                 # row r has x offset 0.5 * ((r + parity) % 2)
+
+    def shift(self, r: int) -> int:
+        """s(r): the up/down neighbours of column c are c - 1 + s and c + s."""
+        return (r + self.parity) % 2
+
+    def j(self, c):
+        """Array column of global column c."""
+        return c - self.base
+
+    @staticmethod
+    def prow(r):
+        """Array row of block row r."""
+        return r + PAD
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.rows + 2 * PAD, self.width
+
+
+@dataclass
+class Segment:
+    block: int
+    row: int
+    lo: int                     # global columns [lo, hi)
+    hi: int
+
+
+@dataclass
+class Peer:
+    rank: int
+    send: list = field(default_factory=list)       # Segments of my OWNED columns the peer keeps as HALO
+    recv: list = field(default_factory=list)       # Segments of the peer's OWNED columns I keep as HALO
+    send_sites: list = field(default_factory=list)  # (lo, hi) global columns of interface bond state
+    recv_sites: list = field(default_factory=list)
+
+
+@dataclass
+class Layout:
+    """One rank's view of the decomposition."""
+    rank: int
+    size: int
+    bounds: np.ndarray
+    reach: Reach | None
+    blocks: tuple               # BlockLayout for BOTTOM, TOP (BOTTOM has rows = 0 for a free block)
+    peers: list
+    tasks: np.ndarray           # [ntasks, TASK_WIDTH] the row schedule of one step
+
+    @property
+    def col_range(self) -> tuple[int, int]:
+        return int(self.bounds[self.rank]), int(self.bounds[self.rank + 1])
+
+    def owned_sites(self) -> tuple[int, int]:
+        """Global columns [lo, hi) of the block's interface sites this rank owns."""
+        lo, hi = self.blocks[TOP].owned[0]
+        return int(lo), int(hi)
+
+
+def _halo(lattice: Lattice, b: int, r: int, reach: Reach | None) -> int:
+    if reach is not None and lattice.has_interface:
+        if b == TOP and r == 0:
+            return max(reach.top_site, BULK_REACH)
+        if b == BOTTOM and r == lattice.bottom.rows - 1:
+            return max(reach.bottom_site, BULK_REACH)
+    return BULK_REACH
+
+
+def _block_layout(lattice: Lattice, b: int, c0: int, c1: int, reach: Reach | None, serial: bool) -> BlockLayout:
+    blk = lattice.blocks[b]
+    span = (blk.col0, blk.col0 + blk.cols)
+    owned = np.zeros((blk.rows, 2), np.int64)
+    stored = np.zeros((blk.rows, 2), np.int64)
+    for r in range(blk.rows):
+        owned[r] = _clip(c0, c1, *span)
+        h = 0 if serial else _halo(lattice, b, r, reach)
+        stored[r] = _clip(c0 - h, c1 + h, *span)
+    nonempty = stored[:, 1] > stored[:, 0]
+    base = (int(stored[nonempty, 0].min()) if nonempty.any() else span[0]) - PAD
+    top = (int(stored[nonempty, 1].max()) if nonempty.any() else span[0]) + PAD
+    integrated = np.ones(blk.rows, bool)
+    if b == BOTTOM and blk.rows:
+        integrated[0] = False          # the fixed row AB, or the rigid substrate's only row
+    return BlockLayout(rows=blk.rows, span=span, base=base, width=top - base, owned=owned, stored=stored,
+                       integrated=integrated, parity=blk.parity)
+
+
+def _intersect(a, b) -> tuple[int, int] | None:
+    lo, hi = max(a[0], b[0]), min(a[1], b[1])
+    return (int(lo), int(hi)) if hi > lo else None
+
+
+def _mask(blk: BlockLayout, r: int, c: int) -> int:
+    """Bonds present at node (r, global column c) of a block."""
+    bc0, bc1 = blk.span
+    s = blk.shift(r)
+    m = 0
+    present = (
+        c + 1 < bc1,                                     # right
+        r + 1 < blk.rows and c + s < bc1,                # up-right
+        r + 1 < blk.rows and c - 1 + s >= bc0,           # up-left
+        c - 1 >= bc0,                                    # left
+        r - 1 >= 0 and c - 1 + s >= bc0,                 # down-left
+        r - 1 >= 0 and c + s < bc1,                      # down-right
+    )
+    for k, p in enumerate(present):
+        m |= int(p) << k
+    return m
+
+
+def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
+    """The row schedule: every OWNED node of an integrated row in exactly one task.
+
+    Interior columns of a row run in one vectorised loop of its kind (FULL,
+    NO_UP, NO_DOWN); the first and last column of a block, where bonds are
+    missing, run as MASKED single nodes.  A task is ``early`` when a peer
+    keeps some of its nodes as HALO: the loop runs early tasks first, sends,
+    and runs the rest while the messages travel.
+    """
+    rows = []
+    for b in (BOTTOM, TOP):
+        blk = blocks[b]
+        bc0, bc1 = blk.span
+        for r in range(blk.rows):
+            if not blk.integrated[r]:
+                continue
+            lo, hi = (int(v) for v in blk.owned[r])
+            if hi <= lo:
+                continue
+            # Columns a peer keeps: left- and right-anchored parts of the owned range.
+            e_lo, e_hi = lo, hi
+            for p in peers:
+                for sg in p.send:
+                    if sg.block == b and sg.row == r:
+                        if sg.lo == lo:
+                            e_lo = max(e_lo, sg.hi)
+                        if sg.hi == hi:
+                            e_hi = min(e_hi, sg.lo)
+            extra = EXTRA_NONE
+            if lattice.has_interface and b == TOP and r == 0:
+                extra = EXTRA_TOP
+            if lattice.has_interface and not lattice.rigid and b == BOTTOM and r == blk.rows - 1:
+                extra = EXTRA_BOTTOM
+            load = int(b == TOP and r == blk.rows - 1)
+            row_drive = int(mode == "shear" and b == TOP and r == blk.rows - 1)
+            has_up, has_dn = r + 1 < blk.rows, r > 0
+            kind = FULL if has_up and has_dn else (NO_UP if has_dn else NO_DOWN)
+            if not has_up and not has_dn:
+                kind = MASKED          # a one-row block: every node on its own
+
+            def early(c_lo, c_hi):
+                return int(c_lo < e_lo or c_hi > e_hi)
+
+            def col_drive(c):
+                return int(row_drive or (b == TOP and ((mode == "push" and c == bc0) or
+                                                      (mode == "pull" and c == bc1 - 1))))
+
+            cuts = sorted({lo, hi, max(lo, min(hi, bc0 + 1)), max(lo, min(hi, bc1 - 1)),
+                           max(lo, min(hi, e_lo)), max(lo, min(hi, e_hi))})
+            for c_lo, c_hi in zip(cuts[:-1], cuts[1:]):
+                if c_hi <= c_lo:
+                    continue
+                edge = c_lo == bc0 or c_hi - 1 == bc1 - 1
+                if kind == MASKED or edge:
+                    for c in range(c_lo, c_hi):
+                        if kind == MASKED or c == bc0 or c == bc1 - 1:
+                            rows.append((b, blk.prow(r), blk.j(c), 1, MASKED, _mask(blk, r, c), extra, load,
+                                         col_drive(c), early(c, c + 1), blk.shift(r)))
+                        else:
+                            rows.append((b, blk.prow(r), blk.j(c), 1, kind, ALL_BONDS, extra, load, row_drive,
+                                         early(c, c + 1), blk.shift(r)))
+                else:
+                    rows.append((b, blk.prow(r), blk.j(c_lo), c_hi - c_lo, kind, ALL_BONDS, extra, load,
+                                 row_drive, early(c_lo, c_hi), blk.shift(r)))
+    t = np.array(rows, np.int64).reshape(-1, TASK_WIDTH)
+    # Grouped by phase (early first), block, then row tasks before single nodes, each in row order.
+    f = TASK_FIELDS.index
+    order = np.lexsort((t[:, f("j0")], t[:, f("row")], t[:, f("kind")] == MASKED, t[:, f("block")],
+                        1 - t[:, f("early")]))
+    return t[order]
+
+
+def task_ranges(tasks: np.ndarray) -> np.ndarray:
+    """ptr[phase, block] = [first row task, first single-node task, end] of the sorted schedule."""
+    f = TASK_FIELDS.index
+    ptr = np.zeros((2, 2, 3), np.int64)
+    pos = 0
+    for phase in (0, 1):
+        for b in (BOTTOM, TOP):
+            sel = (tasks[:, f("early")] == 1 - phase) & (tasks[:, f("block")] == b)
+            n_rows = int((sel & (tasks[:, f("kind")] != MASKED)).sum())
+            n_all = int(sel.sum())
+            ptr[phase, b] = [pos, pos + n_rows, pos + n_all]
+            pos += n_all
+    return ptr
+
+
+def build_layout(lattice: Lattice, rank: int, size: int, reach: Reach | None, mode: str = "none",
+                 cost: np.ndarray | None = None) -> Layout:
+    """The decomposition seen from ``rank`` of ``size``.  Raises ConfigError if it cannot be cut."""
+    bounds = partition(column_cost(lattice) if cost is None else cost, size)
+    if bounds is None:
+        raise ConfigError(f"ranks = {size}: the lattice has {lattice.ncols} columns and every slab needs at "
+                          f"least one; accepted: 1 to {lattice.ncols} ranks")
+    serial = size == 1
+
+    def blocks_of(p):
+        c0, c1 = int(bounds[p]), int(bounds[p + 1])
+        return tuple(_block_layout(lattice, b, c0, c1, reach, serial) for b in (BOTTOM, TOP))
+
+    mine = blocks_of(rank)
+    peers = []
+    for p in range(size):
+        if p == rank:
+            continue
+        theirs = blocks_of(p)
+        peer = Peer(p)
+        for b in (BOTTOM, TOP):
+            if b == BOTTOM and lattice.rigid:
+                continue              # the rigid substrate never moves: nothing to send
+            for r in range(mine[b].rows):
+                s = _intersect(mine[b].owned[r], theirs[b].stored[r])
+                if s:
+                    peer.send.append(Segment(b, r, *s))
+                    if b == TOP and r == 0 and lattice.has_interface:
+                        peer.send_sites.append(s)
+                v = _intersect(theirs[b].owned[r], mine[b].stored[r])
+                if v:
+                    peer.recv.append(Segment(b, r, *v))
+                    if b == TOP and r == 0 and lattice.has_interface:
+                        peer.recv_sites.append(v)
+        if peer.send or peer.recv:
+            peers.append(peer)
+    tasks = _tasks(lattice, mine, peers, mode)
+    return Layout(rank=rank, size=size, bounds=bounds, reach=reach, blocks=mine, peers=peers, tasks=tasks)
+
+
+def max_ranks(lattice: Lattice) -> int:
+    """Every rank owns at least one column; halos reach across as many slabs as they need."""
+    return lattice.ncols

@@ -1,0 +1,69 @@
+"""MPI calls from compiled code: four functions of the MPI library mpi4py uses.
+
+numba code calls ``MPI_Isend``, ``MPI_Irecv``, ``MPI_Waitall`` and
+``MPI_Allreduce`` by symbol name.  The library mpi4py loaded is made visible
+to the JIT linker (``load_library_permanently``), so the compiled loop links
+against exactly the MPI that mpi4py initialised, and numba can cache it:
+nothing process-specific (no ctypes pointers) is baked into the code.
+Handles (communicator, datatypes, the MAX operation) are passed in as
+integers at run time, which serves both MPICH (int handles) and Open MPI
+(pointer handles).
+
+Only ``parallel.exchange`` calls these; kernels never see MPI.
+"""
+from __future__ import annotations
+
+import ctypes.util
+import os
+
+import numpy as np
+from numba import types
+
+from mpi4py import MPI
+
+
+def _libmpi_path() -> str:
+    """Path of the MPI library mpi4py loaded into this process."""
+    try:
+        with open("/proc/self/maps") as f:
+            for line in f:
+                path = line.split()[-1]
+                name = os.path.basename(path)
+                if name.startswith(("libmpi.so", "libmpi_mpifh", "libmpich.so")) and name.split(".so")[0] in (
+                        "libmpi", "libmpich"):
+                    return path
+    except OSError:
+        pass
+    return ctypes.util.find_library("mpi") or ctypes.util.find_library("mpich") or ""
+
+
+def _load():
+    import llvmlite.binding as llb
+    path = _libmpi_path()
+    if not path:
+        raise ImportError("parslip: cannot find the MPI library mpi4py uses; compiled halo exchange unavailable")
+    llb.load_library_permanently(path)
+    return path
+
+
+LIBMPI = _load()
+
+# Handle and request types: int in MPICH, pointers in Open MPI.
+HANDLE = types.int32 if MPI._sizeof(MPI.Comm) == 4 else types.intp
+HANDLE_DTYPE = np.int32 if MPI._sizeof(MPI.Comm) == 4 else np.intp
+REQUEST_DTYPE = np.int32 if MPI._sizeof(MPI.Request) == 4 else np.intp
+STATUS_BYTES = 64            # >= sizeof(MPI_Status) in MPICH (20) and Open MPI (24)
+
+_int = types.int32
+_ptr = types.voidptr
+isend = types.ExternalFunction("MPI_Isend", _int(_ptr, _int, HANDLE, _int, _int, HANDLE, _ptr))
+irecv = types.ExternalFunction("MPI_Irecv", _int(_ptr, _int, HANDLE, _int, _int, HANDLE, _ptr))
+waitall = types.ExternalFunction("MPI_Waitall", _int(_int, _ptr, _ptr))
+allreduce = types.ExternalFunction("MPI_Allreduce", _int(_ptr, _ptr, _int, HANDLE, HANDLE, HANDLE))
+
+
+def handles(comm, float_dtype) -> np.ndarray:
+    """[comm, float datatype, int64 datatype, MAX op] as the integers compiled code passes to MPI."""
+    ftype = MPI.DOUBLE if np.dtype(float_dtype) == np.float64 else MPI.FLOAT
+    return np.array([MPI._handleof(comm), MPI._handleof(ftype), MPI._handleof(MPI.INT64_T),
+                     MPI._handleof(MPI.MAX)], HANDLE_DTYPE)
