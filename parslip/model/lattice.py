@@ -10,6 +10,12 @@ Layout (units of a; h = sqrt(3)/2 is the row height):
     top block    rows 0..Rt-1, columns c0_t .. c0_t+Ct-1, y = (Rb-1) h + delta0 + r h
     bottom block rows 0..Rb-1, columns 0 .. Cb-1,         y = r h
 
+The substrate is "elastic" (a bottom Born lattice of Rb rows whose row 0 AB
+is fixed), "rigid" (one row of fixed interface sites at their reference
+positions: the k_n -> infinity limit; it holds no degrees of freedom and is
+not numbered, so output files hold the top block only) or absent (a free
+block, ``bottom_rows = 0``).
+
 A node in global column c and row r sits at x = c + offset(r), where offset
 is 0 on both interface rows (bottom row Rb-1, top row 0) and alternates by
 1/2 away from them, so each top interface node faces a bottom one at the
@@ -55,8 +61,14 @@ class Lattice:
     """
 
     def __init__(self, top_rows: int, top_cols: int, bottom_rows: int, bottom_cols: int,
-                 delta0: float = 0.5):
+                 delta0: float = 0.5, substrate: str = "elastic"):
         self.delta0 = delta0
+        if bottom_rows == 0:
+            substrate = "none"
+        self.substrate = substrate
+        self.rigid = substrate == "rigid"
+        if substrate == "rigid":
+            bottom_rows = 1             # the fixed row of interface sites
         if bottom_rows > 0:
             self.blocks = (
                 Block(bottom_rows, bottom_cols, 0, 0.0, (bottom_rows - 1) % 2),
@@ -68,10 +80,13 @@ class Lattice:
             self.blocks = (Block(0, 0, 0, 0.0, 0), Block(top_rows, top_cols, 0, 0.0, 0))
             self.ncols = top_cols
         self.has_interface = bottom_rows > 0
+        # Blocks whose nodes are degrees of freedom, numbered and written out.
+        self.numbered = (not self.rigid and bottom_rows > 0, True)
         cols = np.arange(self.ncols)
         self.col_count = np.zeros(self.ncols, np.int64)
-        for b in self.blocks:
-            self.col_count += np.where((cols >= b.col0) & (cols < b.col0 + b.cols), b.rows, 0)
+        for bi, b in enumerate(self.blocks):
+            if self.numbered[bi]:
+                self.col_count += np.where((cols >= b.col0) & (cols < b.col0 + b.cols), b.rows, 0)
         self.col_start = np.concatenate([[0], np.cumsum(self.col_count)])
         self.n_nodes = int(self.col_start[-1])
 
@@ -103,8 +118,10 @@ class Lattice:
         block, row, col = np.broadcast_arrays(np.asarray(block), np.asarray(row), np.asarray(col))
         out = np.full(block.shape, -1, np.int64)
         for bi, b in enumerate(self.blocks):
+            if not self.numbered[bi]:
+                continue
             m = (block == bi) & (row >= 0) & (row < b.rows) & (col >= b.col0) & (col < b.col0 + b.cols)
-            below = 0 if bi == BOTTOM else np.where(
+            below = 0 if bi == BOTTOM or not self.numbered[BOTTOM] else np.where(
                 (col[m] >= self.bottom.col0) & (col[m] < self.bottom.col0 + self.bottom.cols),
                 self.bottom.rows, 0)
             out[m] = self.col_start[col[m]] + below + row[m]
@@ -116,7 +133,7 @@ class Lattice:
         blk, row, col = [], [], []
         for c in range(c0, c1):
             for bi, b in enumerate(self.blocks):
-                if b.col0 <= c < b.col0 + b.cols:
+                if self.numbered[bi] and b.col0 <= c < b.col0 + b.cols:
                     blk.append(np.full(b.rows, bi))
                     row.append(np.arange(b.rows))
                     col.append(np.full(b.rows, c))

@@ -47,7 +47,14 @@ def stiffness_matrix(lattice: Lattice, kn, kt, kx: float, ky: float, mode: str =
             rows.append(np.concatenate([2 * i + a, 2 * j + a, 2 * i + a, 2 * j + a]))
             cols.append(np.concatenate([2 * i + c, 2 * j + c, 2 * j + c, 2 * i + c]))
             vals.append(np.concatenate([v, v, -v, -v]))
-    if lattice.has_interface:
+    if lattice.has_interface and lattice.rigid:
+        # Springs to fixed sites: only their diagonal terms on the block's interface nodes.
+        it = lattice.gid(1, 0, lattice.top.col0 + np.arange(lattice.n_top_sites))
+        for (a, kk) in ((0, kx), (1, ky)):
+            rows.append(2 * it + a)
+            cols.append(2 * it + a)
+            vals.append(np.full(len(it), kk))
+    elif lattice.has_interface:
         s = np.arange(lattice.n_top_sites)
         t = lattice.top
         it = lattice.gid(1, 0, t.col0 + s)
@@ -104,7 +111,7 @@ def omega_max(lattice: Lattice, kn, kt, kx: float, ky: float) -> tuple[float, st
     """
     ndof = 2 * lattice.n_nodes
     if ndof > LANCZOS_MAX_DOFS:
-        blocks = [b for b in (0, 1) if lattice.blocks[b].rows > 0]
+        blocks = [b for b in (0, 1) if lattice.blocks[b].rows > 0 and lattice.numbered[b]]
         w2 = max(bulk_omega2(kn[b], kt[b]) for b in blocks)
         if lattice.has_interface:
             w2 += 2 * max(kx, ky)

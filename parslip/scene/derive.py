@@ -15,7 +15,7 @@ from ..model.lattice import Lattice
 from ..model.physics import Material
 from ..model.stability import dt_max as _dt_max
 from ..model.stability import omega_max as _omega_max
-from ..parallel.decomposition import TOP_SITE_REACH, bottom_site_reach, max_ranks
+from ..parallel.layout import Reach, interface_reach, max_ranks
 
 
 @dataclass
@@ -38,6 +38,8 @@ class Setup:
     snapshot_steps: tuple     # drive steps of the snapshots, first at 0, last at n_drive
     v0: float                # internal units
     slip_reach: float        # a
+    reach: Reach             # halo widths that serve the slip reach
+    precision: str           # "float64" or "float32"
 
     @property
     def n_steps(self) -> int:
@@ -55,9 +57,13 @@ class Setup:
     def n_snapshots(self) -> int:
         return len(self.snapshot_steps)
 
+    @property
+    def dtype(self):
+        import numpy as np
+        return np.float32 if self.precision == "float32" else np.float64
+
     def max_ranks(self) -> int:
-        reach = max(bottom_site_reach(self.slip_reach) if self.lattice.has_interface else 1, TOP_SITE_REACH)
-        return max_ranks(self.lattice, reach)
+        return max_ranks(self.lattice)
 
     def to_lcr(self, t_internal: float) -> float:
         return t_internal / self.t_unit
@@ -68,7 +74,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
                               scene["material.bottom_kn"], scene["material.bottom_kt"])
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
-                  scene["lattice.bottom_cols"], scene["interface.delta0"])
+                  scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     if omega is None:
         omega, method = _omega_max(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
                            scene["interface.kx"], scene["interface.ky"])
@@ -95,4 +101,5 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     return Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                  dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                  n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
-                 slip_reach=reach)
+                 slip_reach=reach, reach=interface_reach(scene["interface.delta0"], scene["interface.delta_b"], reach),
+                 precision=scene["time.precision"])

@@ -49,6 +49,9 @@ SCHEMA: dict[str, Key] = {
                                lambda v: v == 0 or v >= 2, "rows of the substrate (bottom) block"),
     "lattice.bottom_cols": Key(300, int, "nodes", ">= top_cols, same parity", _range(4),
                                "nodes per row of the substrate; the top block is centred on it"),
+    "lattice.substrate": Key("elastic", str, "-", "'elastic' or 'rigid'", _choice("elastic", "rigid"),
+                             "substrate model: an elastic lattice of bottom_rows rows, or its k_n -> infinity "
+                             "limit, one row of fixed interface sites (no substrate nodes are computed or written)"),
     # materials --------------------------------------------------------------
     "material.nu": Key(0.2, float, "-", "-1 < nu <= 0.25 (plane strain) or <= 1/3 (plane stress)",
                        _range(-1.0, 1.0 / 3.0, lo_open=True), "Poisson ratio of the top block"),
@@ -88,6 +91,8 @@ SCHEMA: dict[str, Key] = {
     "time.dt": Key(0.0, float, "a/c", "0 (auto) or 0 < dt < 2/omega_max", _range(0.0),
                    "explicit time step; overrides time.safety"),
     "time.zeta": Key(0.1, float, "c/a", ">= 0", _range(0.0), "velocity damping"),
+    "time.precision": Key("float64", str, "-", "'float64' or 'float32'", _choice("float64", "float32"),
+                          "float type of the state; float32 stores displacements from the reference lattice"),
     # output -------------------------------------------------------------------
     "output.interface_dt": Key(0.0, float, "l/c_r", ">= 0 (0 = auto: a/c_r, one frame per spacing a front at c_r crosses)",
                                _range(0.0), "interval between interface frames"),
