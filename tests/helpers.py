@@ -3,9 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from parslip.scene.load import resolve
+from parslip.engine.reference import Simulation as ReferenceSimulation
 from parslip.engine.simulation import Simulation
+from parslip.model.lattice import TOP
 from parslip.scene.derive import derive
+from parslip.scene.load import resolve
 
 # A free block at rest: no substrate, no load, no drive, no damping.
 FREE_BLOCK = {"lattice.bottom_rows": 0, "drive.mode": "none", "load.ramp": 0.0, "load.settle": 0.0,
@@ -37,15 +39,30 @@ def simulation(base: dict | None = None, **kw) -> Simulation:
 
 
 def set_field(sim: Simulation, fn) -> None:
-    """u = fn(x, y) -> (ux, uy) on every local node, at rest (u_prev = u)."""
-    nd = sim.layout.nodes
+    """u = fn(x, y) -> (ux, uy) on every node, at rest (u(n-1) = u(n))."""
+    nd = sim.state.nodes()
     ux, uy = fn(nd["x"], nd["y"])
-    sim.u[:, 0], sim.u[:, 1] = ux, uy
-    sim.u_prev[:] = sim.u
+    sim.set_u(np.stack([ux, uy], axis=1))
 
 
 def row_nodes(sim: Simulation, row: int) -> np.ndarray:
-    """Owned local indices of a row of the top block, sorted by x."""
-    nd = sim.layout.nodes
-    idx = np.flatnonzero((nd["block"][:sim.n_owned] == 1) & (nd["row"][:sim.n_owned] == row))
+    """Indices (into the arrays in global id order) of a row of the top block, sorted by x."""
+    nd = sim.state.nodes()
+    idx = np.flatnonzero((nd["block"] == TOP) & (nd["row"] == row))
     return idx[np.argsort(nd["x"][idx])]
+
+
+def reference(sim: Simulation) -> ReferenceSimulation:
+    """The first engine's plain per-node implementation, holding a copy of ``sim``'s state (one rank).
+
+    An independent implementation of the same model: its kernels gather
+    neighbours by index and sum each bond's force on its own.
+    """
+    ref = ReferenceSimulation(sim.setup)
+    assert np.array_equal(ref.layout.nodes["gid"][:ref.n_owned], sim.state.gid)
+    ref.u[:ref.n_owned] = sim.u
+    ref.u_prev[:ref.n_owned] = sim.u_prev
+    ref.partner[ref.own_sites] = sim.state.owned_partner()
+    ref.x0[ref.own_sites] = sim.state.owned_x0()
+    ref.n = sim.n
+    return ref

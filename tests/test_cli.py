@@ -97,13 +97,13 @@ def test_keys_lists_units_and_ranges(capsys):
 @pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
 def test_too_many_ranks_is_bad_input(tmp_path):
     sc = tmp_path / "tiny.toml"
-    sc.write_text("[lattice]\ntop_rows = 3\ntop_cols = 8\nbottom_rows = 3\nbottom_cols = 20\n"
+    sc.write_text("[lattice]\ntop_rows = 3\ntop_cols = 4\nbottom_rows = 0\n"
                   "[drive]\nv0 = 0.01\nduration = 1.0\n")
-    p = subprocess.run([MPIEXEC, "-n", "3", sys.executable, "-m", "parslip", "run", str(sc),
+    p = subprocess.run([MPIEXEC, "-n", "5", sys.executable, "-m", "parslip", "run", str(sc),
                         "--out", str(tmp_path / "o.vtkhdf")], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2, p.stderr
     lines = [ln for ln in p.stderr.strip().splitlines() if ln.startswith("parslip: error")]
-    assert len(lines) == 1 and "ranks = 3" in lines[0] and "accepted: 1 to" in lines[0], p.stderr
+    assert len(lines) == 1 and "ranks = 5" in lines[0] and "accepted: 1 to 4 ranks" in lines[0], p.stderr
     assert "Traceback" not in p.stderr
     assert not os.path.exists(tmp_path / "o.vtkhdf")
 
@@ -129,7 +129,7 @@ def test_output_held_open_elsewhere_is_bad_input(capsys, tmp_path, push):
 
 def test_free_block_runs_and_reports_its_own_rank_limit(capsys, tmp_path, push):
     code, out, _ = _run(capsys, "info", push, "--set", "lattice.bottom_rows=0")
-    assert code == 0 and "ranks            1 to 25" in out          # 100 columns, 4-column slabs
+    assert code == 0 and "ranks            1 to 100" in out         # 100 columns, a column each at most
     code, _, err = _run(capsys, "run", push, "--out", str(tmp_path / "free.vtkhdf"), "--set", "lattice.bottom_rows=0",
                         "--set", "drive.duration=0.2", "--quiet")
     assert code == 0, err

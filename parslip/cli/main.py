@@ -127,8 +127,9 @@ def cmd_info(args) -> int:
           f"{st.n_snapshots} snapshots, about {out_bytes / 2**20:.1f} MiB")
     print(f"memory           about {n * bytes_node / 2**20:.1f} MiB of state on one rank "
           f"(+ about {n * 400 / 2**20:.0f} MiB on rank 0 while it finds omega_max)")
-    print(f"ranks            1 to {st.max_ranks()} (slabs of whole columns, at least "
-          f"{lat.ncols // st.max_ranks()} wide for a slip reach of {st.slip_reach:.3g} a)")
+    r = st.reach
+    print(f"ranks            1 to {st.max_ranks()} (slabs of whole columns; interface halos of {r.top_site} and "
+          f"{r.bottom_site} columns serve a slip reach of {st.slip_reach:.3g} a, across as many slabs as needed)")
     return 0
 
 
@@ -137,7 +138,6 @@ def cmd_run(args) -> int:
     from ..engine.simulation import Simulation
     from ..errors import RunError
     from ..io.output import Output, git_commit
-    from ..parallel.decomposition import SlabExchanger
     from ..scene.derive import derive
     from .progress import Progress, setup_logging
 
@@ -148,8 +148,7 @@ def cmd_run(args) -> int:
     omega = _bcast(comm, lambda: (lambda s: (s.omega_max, s.omega_method))(derive(scene)))
     st = derive(scene, omega)
     out = _bcast(comm, lambda: _out_path(args))
-    ex = SlabExchanger(comm) if size > 1 else None
-    sim = Simulation(st, ex, comm)          # raises ConfigError on every rank alike
+    sim = Simulation(st, comm)              # raises ConfigError on every rank alike
     prov = comm.bcast({"git_commit": git_commit(), "scene_file": os.path.abspath(args.scene),
                        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                        "command": " ".join(sys.argv)} if rank == 0 else None, root=0)

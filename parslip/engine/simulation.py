@@ -1,9 +1,10 @@
-"""One rank's state and the time loop that advances it.
+"""One rank's simulation: builds the state and drives the compiled loop between outputs.
 
-Responsible for building one rank's arrays from the decomposition
-(``Simulation``) and running the load phases: ramp F_N, settle, drive.  The
-time loop is the same on one rank and on many: it calls compiled kernels,
-then the exchanger it was given.
+Responsible for the Python side of a run: which steps the compiled loop
+(``engine.loop.advance``) runs per call, writing interface frames in blocks
+and snapshots at their steps, progress, and turning the loop's flags into
+errors that name the step, the place and the likely cause.  The exchange
+plan is passed in: one rank runs the same loop with a plan of no peers.
 
 Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
 """
@@ -11,205 +12,198 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels
 from ..errors import NonFiniteError, SlipReachError
-from ..model.lattice import DIRECTIONS, TOP
-from ..model.physics import DENSITY
-from ..parallel.decomposition import NullExchanger, build_layout
-from ..scene.derive import Setup
+from ..model.lattice import TOP
+from ..parallel.exchange import build_plan
+from ..parallel.layout import PAD, build_layout, task_ranges
+from . import loop as L
+from .state import State
+
+# Work per compiled call, in node updates: about 0.3 s, so progress and output stay timely.
+CHUNK_UPDATES = 2e8
+# Interface frames held in memory before a block is written.
+FRAME_BUFFER_BYTES = 8 << 20
+# A node that moves this far in one step (a) is running away: faster than any wave in the lattice.
+RUNAWAY_JUMP = 0.5
+# Steps between checks of the owned state and the agreement of all ranks on whether to stop.
+CHECK_EVERY = 256
 
 
 class Simulation:
     """One rank's share of the lattice and the loop that advances it."""
 
-    def __init__(self, setup: Setup, exchanger=None, comm=None):
-        self.setup = setup
-        self.ex = exchanger or NullExchanger()
-        self.comm = comm
-        rank, size = self.ex.rank, self.ex.size
-        s, lat, mat = setup.scene, setup.lattice, setup.material
-        self.layout = lay = build_layout(lat, rank, size, setup.slip_reach)
-        nodes = lay.nodes
-        n_loc, n_own = len(nodes["gid"]), lay.n_owned
-        self.n_owned = n_own
-
-        # Node arrays -----------------------------------------------------
-        self.u = np.zeros((n_loc, 2))
-        self.u_prev = np.zeros((n_loc, 2))
-        self.f = np.zeros((n_loc, 2))
-        self.react = np.zeros((n_loc, 2))
-        self.ref_x = nodes["x"].copy()
-        self.block = nodes["block"].astype(np.int8)
-        self.kind = lat.kinds(nodes, s["drive.mode"])
-        self.u_drive0 = np.zeros(n_loc)
-        self.fext = np.zeros((n_loc, 2))
-        if lat.has_interface:
-            self.fext[lat.loaded(nodes), 1] = -s["load.FN"] / lat.top.cols
-        self.kn = np.array([mat.kn_bottom, mat.kn_top])
-        self.kt = np.array([mat.kt_bottom, mat.kt_top])
-        gids = nodes["gid"]
-        nbg = lat.neighbour_gids({k: v[:n_own] for k, v in nodes.items()})
-        order = np.argsort(gids)     # local order is OWNED, LEFT halo, RIGHT halo: not sorted
-        pos = np.minimum(np.searchsorted(gids[order], nbg), len(gids) - 1)
-        self.nb = np.where(nbg >= 0, order[pos], -1).astype(np.int64)
-        if not np.array_equal(gids[self.nb[nbg >= 0]], nbg[nbg >= 0]):
-            raise AssertionError("a neighbour of an owned node is missing from the halo")
-        self.dirs = DIRECTIONS.copy()
-
-        # Interface arrays ------------------------------------------------
-        self.top_node = lay.top_node
-        self.top_owned = lay.top_owned
-        self.partner = (lay.top_gsite + lat.top.col0).astype(np.int64) if lat.has_interface \
-            else np.zeros(0, np.int64)
-        self.x0 = np.zeros(len(self.top_node))
-        self.bot_node = lay.bot_node
-        self.bot_g0 = lay.bot_gsite0
-        self.taken = np.zeros(len(self.bot_node), np.int8)
-        self.claim = np.zeros(len(self.top_node), np.int64)
-        self.counters = np.zeros(2, np.int64)
-        self.own_sites = np.flatnonzero(self.top_owned)
-        self.own_bottom_sites = self.bot_node[self.bot_node < n_own]
-
+    def __init__(self, setup, comm=None, dtype=None):
+        self.setup = st = setup
+        self.comm = comm if comm is not None and comm.Get_size() > 1 else None
+        rank, size = (comm.Get_rank(), comm.Get_size()) if self.comm else (0, 1)
+        self.rank, self.size = rank, size
+        sc = st.scene
+        self.layout = build_layout(st.lattice, rank, size, st.reach, sc["drive.mode"])
+        self.dtype = np.dtype(dtype or st.dtype)
+        self.state = State(st, self.layout, self.dtype)
+        self.plan = build_plan(self.layout, self.dtype, self.comm)
+        self.tasks = self.layout.tasks
+        self.ptr = task_ranges(self.tasks)
+        zeta = sc["time.zeta"]
+        c = 0.5 * zeta * st.dt
+        lat = st.lattice
+        n_early = int(self.tasks[:, 9].sum()) if len(self.tasks) else 0
+        self.ip = np.zeros(L.I_SIZE, np.int64)
+        self.ip[:] = [st.n_ramp, st.n_drive_start, int(sc["drive.mode"] != "none"), st.frame_every, st.n_frames,
+                      CHECK_EVERY, int(lat.has_interface), int(lat.rigid),
+                      self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1), n_early, self.layout.blocks[0].parity,
+                      self.layout.blocks[1].parity]
+        fext = -sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0
+        self.fp = np.array([st.dt, st.v0, fext, RUNAWAY_JUMP], np.float64)
+        self.sp = np.array([st.dt * st.dt, 1.0 - c, 1.0 / (1.0 + c), float(zeta > 0)], self.dtype)
+        self.flags = np.zeros(L.L_SIZE, np.int64)
+        self.gflags = np.zeros(L.L_SIZE, np.int64)
+        self.timers = np.zeros(L.T_SIZE, np.int64)
+        nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
+        per_frame = max(nsites, 1) * 37 + 8
+        cap = int(min(max(16, FRAME_BUFFER_BYTES // per_frame), st.n_frames))
+        self.frames = L.Frames(intact=np.zeros((cap, nsites), np.uint8), partner=np.zeros((cap, nsites), np.int32),
+                               ux=np.zeros((cap, nsites)), uy=np.zeros((cap, nsites)), sxy=np.zeros((cap, nsites)),
+                               syy=np.zeros((cap, nsites)), step=np.zeros(cap, np.int64),
+                               cursor=np.array([0, 0, -1], np.int64))
+        self.chunk = int(np.clip(CHUNK_UPDATES / max(self.state.n_owned, 1), 64, 200_000))
         self.n = 0
-        self._snap_index = {k: j for j, k in enumerate(setup.snapshot_steps)}
-        self.first_bad = None      # (step, local index) of the first non-finite update here
-        p = s
-        self.delta0, self.delta_b = p["interface.delta0"], p["interface.delta_b"]
-        self.kx, self.ky = p["interface.kx"], p["interface.ky"]
-        self.reform_zero = p["interface.reform_x0"] == "zero"
-        self.zeta = p["time.zeta"]
+        self._snap = {st.n_drive_start + k: j for j, k in enumerate(st.snapshot_steps)}
+        self._snap_done = set()
 
-    # -------------------------------------------------------------- phases --
-    def load_factor(self, n: int) -> float:
+    # ---------------------------------------------------------------- steps --
+    @property
+    def counters(self) -> np.ndarray:
+        """[bond breaks, re-formations] among this rank's interface sites so far."""
+        return self.state.iface.counters
+
+    def advance(self, n_end: int):
+        """Run the compiled loop to step ``n_end`` or until it must stop; returns why it returned."""
+        s = self.state
+        n, why = L.advance(self.n, n_end, s.levels, self.plan, self.tasks, self.ptr, s.K, self.ip, self.fp,
+                           self.sp, s.iface, s.drive0, self.frames, self.flags, self.gflags, self.timers)
+        self.n = int(n)
+        return why
+
+    def step(self):
+        """One step, n -> n + 1 (tests)."""
+        self.run(until=self.n + 1)
+
+    # ------------------------------------------------- state by global id --
+    @property
+    def u(self) -> np.ndarray:
+        """u(n) of the OWNED nodes, (n_owned, 2) in global id order (a); a copy."""
+        return self.state.owned_u(self.n)
+
+    @property
+    def u_prev(self) -> np.ndarray:
+        """u(n - 1) of the OWNED nodes; a copy."""
+        return self.state.owned_u(self.n - 1)
+
+    def set_u(self, u: np.ndarray, u_prev: np.ndarray | None = None):
+        """Set u(n) and u(n - 1) (default: u, at rest) of the OWNED nodes, in global id order.
+
+        One rank only: HALO copies are not refreshed until the next step's exchange.
+        """
+        self.state.set_owned_u(self.n, u)
+        self.state.set_owned_u(self.n - 1, u if u_prev is None else u_prev)
+
+    def load_factor(self, n: int | None = None) -> float:
+        """min(1, n / n_ramp): the share of F_N acting at step n."""
+        n = self.n if n is None else n
         st = self.setup
         return 1.0 if st.n_ramp == 0 else min(1.0, n / st.n_ramp)
 
-    def step(self):
-        """Advance the state from step n to n+1 (positions u(n) -> u(n+1))."""
-        st, n = self.setup, self.n
-        lay = self.layout
-        drive_on = n >= st.n_drive_start and st.scene["drive.mode"] != "none"
-        if n == st.n_drive_start:
-            self.u_drive0[:] = self.u[:, 0]
-        if len(self.top_node):
-            kernels.interface_update(self.u, self.ref_x, self.top_node, self.top_owned, self.partner, self.x0,
-                                     self.bot_node, self.bot_g0, self.delta0, self.delta_b, self.reform_zero,
-                                     self.taken, self.claim, self.counters)
-        kernels.bulk_forces(self.u, self.nb, self.block, self.kn, self.kt, self.dirs, self.n_owned, self.f)
-        self.react[:] = 0.0
-        if len(self.top_node):
-            kernels.interface_forces(self.u, self.ref_x, self.top_node, self.top_owned, self.partner, self.x0,
-                                     self.bot_node, self.bot_g0, self.delta0, self.kx, self.ky, self.f, self.react)
-        self.ex.reverse_add(lay.react_channel, self.react)
-        shift = st.v0 * ((n + 1 - st.n_drive_start) * st.dt)
-        bad = kernels.verlet_update(self.u, self.u_prev, self.f, self.react, self.fext, self.load_factor(n),
-                                    self.kind, self.u_drive0, shift, drive_on, st.dt, self.zeta, self.n_owned)
-        if bad >= 0 and self.first_bad is None:
-            self.first_bad = (n + 1, bad)
-        self.ex.forward(lay.node_channel, self.u)
-        if st.lattice.has_interface:     # global, not local: a rank with no top sites still serves its neighbours
-            self.ex.forward(lay.top_channel, self.partner, self.x0)
-        self.n = n + 1
+    def energy(self, n: int | None = None, load: float | None = None) -> float:
+        """Potential energy of this rank's part at step n (default: now), in m c^2."""
+        n = self.n if n is None else n
+        return self.state.potential_energy(n, self.load_factor(n) if load is None else load)
 
-    # ----------------------------------------------------------- checks -----
-    def check_health(self):
-        """Collective: stop every rank if any state went non-finite or slid past the halo."""
-        bad_step = self.first_bad[0] if self.first_bad else np.iinfo(np.int64).max
-        slip = 0.0
-        if self.ex.size > 1 and len(self.own_sites):
-            slip = float(np.max(np.abs(self.u[self.top_node[self.own_sites], 0])))
-            if len(self.own_bottom_sites):
-                slip += float(np.max(np.abs(self.u[self.own_bottom_sites, 0])))
-        if self.comm is not None and self.ex.size > 1:
-            from mpi4py import MPI
-            bad_step = self.comm.allreduce(bad_step, op=MPI.MIN)
-            slip = self.comm.allreduce(slip, op=MPI.MAX)
-        if bad_step != np.iinfo(np.int64).max:
-            mine = self.describe_bad() if self.first_bad and self.first_bad[0] == bad_step else None
-            if self.comm is not None and self.ex.size > 1:
-                found = [m for m in self.comm.allgather(mine) if m]
-                mine = min(found)[1]
-            raise NonFiniteError(mine)
-        if slip > self.setup.slip_reach:
-            raise SlipReachError(
-                f"interface slip reached {slip:.3g} a at step {self.n}, beyond interface.slip_reach = "
-                f"{self.setup.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
-                f"interface.slip_reach={2 * slip:.3g} or with fewer ranks")
-
-    def describe_bad(self):
-        step, i = self.first_bad
-        nd = self.layout.nodes
-        st = self.setup
-        blk = "top" if nd["block"][i] == TOP else "bottom"
-        t = st.to_lcr((step - st.n_drive_start) * st.dt)
-        return (nd["gid"][i], f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) "
-                f"at node {nd['gid'][i]} ({blk} block, row {nd['row'][i]}, column {nd['col'][i]}, "
-                f"x = {nd['x'][i]:.4g} a, y = {nd['y'][i]:.4g} a); try a smaller time.safety")
-
-    # ------------------------------------------------------------ fields ----
-    def interface_state(self):
-        """Owned top sites in global site order: intact (uint8), ux/l, uy/l, partner, and the
-        interface traction sxy = -f_x/(a rho c_r^2), syy = -f_y/(a rho c_r^2) of the bond's force f on the top node."""
-        s = self.own_sites
-        nodes = self.top_node[s]
-        l = self.setup.l
-        p = self.partner[s]
-        bonded = p >= 0
-        q = np.where(bonded, p - self.bot_g0, 0)
-        ib = self.bot_node[np.clip(q, 0, max(len(self.bot_node) - 1, 0))] if len(self.bot_node) else q
-        dx = (self.ref_x[nodes] - self.ref_x[ib]) + (self.u[nodes, 0] - self.u[ib, 0])
-        dy = self.delta0 + (self.u[nodes, 1] - self.u[ib, 1])
-        scale = 1.0 / (DENSITY * self.setup.material.c_r ** 2)
-        sxy = np.where(bonded, self.kx * (dx - self.x0[s]) * scale, 0.0)
-        syy = np.where(bonded, self.ky * (dy - self.delta0) * scale, 0.0)
-        return (bonded.astype(np.uint8), self.u[nodes, 0] / l, self.u[nodes, 1] / l, p.astype(np.int32), sxy, syy)
-
-    def node_fields(self):
-        """Owned nodes: positions (N,3), velocities (N,3), stress (N,3) in rho c_r^2."""
-        n = self.n_owned
-        nd = self.layout.nodes
-        pos = np.zeros((n, 3))
-        pos[:, 0] = nd["x"][:n] + self.u[:n, 0]
-        pos[:, 1] = nd["y"][:n] + self.u[:n, 1]
-        vel = np.zeros((n, 3))
-        vel[:, :2] = (self.u[:n] - self.u_prev[:n]) / self.setup.dt
-        sig = np.zeros((n, 3))
-        kernels.node_stress(self.u, self.nb, self.block, self.kn, self.kt, self.dirs, n,
-                            0.5 / self.setup.material.c_r ** 2, sig)
-        return pos, vel, sig
-
-    def energy_per_node(self, load=None):
-        out = np.zeros(self.n_owned)
-        lf = self.load_factor(self.n) if load is None else load
-        kernels.potential_energy(self.u, self.ref_x, self.nb, self.block, self.kn, self.kt, self.dirs,
-                                 self.n_owned, self.fext, lf, self.top_node, self.top_owned, self.partner,
-                                 self.x0, self.bot_node, self.bot_g0, self.delta0, self.kx, self.ky, out)
-        return out
-
-    # -------------------------------------------------------------- loop ----
     def run(self, writer=None, progress=None, until: int | None = None):
-        """Advance to step ``until`` (default: the end), writing frames on the way."""
+        """Advance to step ``until`` (default: the end), writing frames and snapshots on the way."""
         st = self.setup
         end = st.n_steps if until is None else until
-        check_every = max(1, min(st.frame_every, 200))
-        while self.n < end:
-            self._output(writer)
-            self.step()
-            if self.n % check_every == 0:
-                self.check_health()
+        while True:
+            self._snapshot(writer)
+            if self.n >= end:
+                break
+            target = min(end, self.n + self.chunk, min((k for k in self._snap if k > self.n), default=end))
+            why = self.advance(target)
+            if why == L.FRAMES_FULL:
+                self._flush(writer)
+                continue
+            if why == L.STOPPED:
+                self._fail(writer)
             if progress is not None:
                 progress.update(self.n)
-        self.check_health()
-        self._output(writer)
+        self.advance(self.n)                 # the frame of the last step, if it is one
+        self._flush(writer)
 
-    def _output(self, writer):
-        st = self.setup
-        k = self.n - st.n_drive_start
-        if writer is None or k < 0:
+    # --------------------------------------------------------------- output --
+    def _flush(self, writer):
+        fr = self.frames
+        count = int(fr.cursor[L.C_COUNT])
+        if writer is not None and count:
+            base = int(fr.cursor[L.C_BASE])
+            writer.interface_frames(base, count, fr)
+        fr.cursor[L.C_BASE] += count
+        fr.cursor[L.C_COUNT] = 0
+
+    def _snapshot(self, writer):
+        j = self._snap.get(self.n)
+        if j is None or self.n in self._snap_done:
             return
-        t = st.to_lcr(k * st.dt)
-        if k % st.frame_every == 0 and k // st.frame_every < st.n_frames:
-            writer.interface_frame(k // st.frame_every, t, *self.interface_state())
-        j = self._snap_index.get(k)
-        if j is not None:
-            writer.snapshot(j, t, *self.node_fields(), self.partner[self.own_sites])
+        self._snap_done.add(self.n)
+        if writer is None:
+            return
+        st = self.setup
+        t = st.to_lcr((self.n - st.n_drive_start) * st.dt)
+        pos, vel, sig = self.state.node_fields(self.n)
+        writer.snapshot(j, t, pos, vel, sig, self.state.owned_partner())
+
+    # --------------------------------------------------------------- errors --
+    def _gather(self, x):
+        return [x] if self.comm is None else self.comm.allgather(x)
+
+    def _fail(self, writer):
+        """Every rank stopped at the same step: find the first problem on any rank and raise it."""
+        st = self.setup
+        mine = self.flags.copy()
+        reports = [r for r in self._gather(mine) if r[L.L_BITS]]
+        first = min(reports, key=lambda r: r[L.L_STEP])
+        bits, step = int(first[L.L_BITS]), int(first[L.L_STEP])
+        # Frames recorded at or after the failing step hold a broken state: drop them.
+        fr = self.frames
+        keep = int(np.searchsorted(fr.step[:int(fr.cursor[L.C_COUNT])], step, side="left"))
+        fr.cursor[L.C_COUNT] = keep
+        self._flush(writer)
+        t = st.to_lcr((step - st.n_drive_start) * st.dt)
+        if bits & (L.FLAG_NONFINITE | L.FLAG_RUNAWAY):
+            raise NonFiniteError(self._describe_node(first, t))
+        if bits & L.FLAG_REACH:
+            slip = max(self._gather(self.state.max_top_slip(self.n)))
+            raise SlipReachError(
+                f"interface slip reached {slip:.3g} a at step {step} (t = {t:.4g} l/c_r), beyond interface.slip_reach "
+                f"= {st.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
+                f"interface.slip_reach={max(2 * slip, st.slip_reach + 2):.3g}")
+        if bits & L.FLAG_DRIFT:
+            raise NonFiniteError(
+                f"the substrate's interface site at column {int(first[L.L_COL])} moved "
+                f"{first[L.L_VALUE] / 1e6:.3g} a by step {step}, more than the {st.reach.drift} a the re-bonding "
+                f"window assumes; the substrate is too soft for this model (raise material.bottom_kn)")
+        raise NonFiniteError(f"MPI error {first[L.L_VALUE] / 1e6:.0f} in the halo exchange at step {step}")
+
+    def _describe_node(self, f, t):
+        st, lat = self.setup, self.setup.lattice
+        step, b, r, c = int(f[L.L_STEP]), int(f[L.L_BLOCK]), int(f[L.L_ROW]) - PAD, int(f[L.L_COL])
+        B = lat.blocks[b]
+        gid = int(lat.gid(b, r, c))
+        x, y = c + float(B.offset(r)), B.y0 + r * np.sqrt(3) / 2
+        where = (f"at node {gid} ({'top' if b == TOP else 'bottom'} block, row {r}, column {c}, x = {x:.4g} a, "
+                 f"y = {y:.4g} a)")
+        if f[L.L_BITS] & L.FLAG_NONFINITE:
+            return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) {where}; "
+                    f"likely cause: a time step above the stability limit; try a smaller time.safety")
+        return (f"state grew without bound: at step {step} (t = {t:.4g} l/c_r from drive start) the node {where} "
+                f"moved {f[L.L_VALUE] / 1e6:.3g} a in one step (faster than any wave of the lattice); likely cause: "
+                f"a time step above the stability limit (try a smaller time.safety); output written so far is kept")

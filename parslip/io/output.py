@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import ConfigError
-from ..model.lattice import BOTTOM
+from ..model.lattice import BOTTOM, TOP
 from ..scene.schema import to_toml
 from .contract import FRAME_FIELDS, INTERFACE_DATASETS
 
@@ -64,22 +64,26 @@ class Output:
         self.root = self.rank == 0
         self.f = self._open(path, comm)
 
-        # My slices of the global arrays.
-        self.node0 = int(lay.nodes["gid"][0]) if lay.n_owned else 0
-        self.site0 = int(lay.top_gsite[sim.own_sites[0]]) if len(sim.own_sites) else 0
-        n = lay.n_owned
-        has = sim.nb[:, :3] >= 0
-        gi = lay.nodes["gid"][:n]
-        self.bulk_cells = np.stack([np.repeat(gi[:, None], 3, 1)[has],
-                                    lay.nodes["gid"][sim.nb[:, :3][has]]], axis=1).astype(np.int64)
+        # My slices of the global arrays: OWNED nodes are a contiguous range of global ids.
+        state = sim.state
+        self.node0 = int(state.gid[0]) if state.n_owned else 0
+        self.site0 = state.site0() if lat.has_interface else 0
+        c0, c1 = lay.col_range
+        nodes = lat.nodes_in_columns(c0, c1)
+        nbr = lat.neighbour_gids(nodes)[:, :3]           # bonds 0..2: each bulk bond once
+        has = nbr >= 0
+        self.bulk_cells = np.stack([np.repeat(nodes["gid"][:, None], 3, 1)[has], nbr[has]],
+                                   axis=1).astype(np.int64)
         counts = self._allgather(len(self.bulk_cells))
         self.cell0 = int(sum(counts[:self.rank]))
         self.n_bulk_cells = int(sum(counts))
         self.n_nodes, self.n_sites = lat.n_nodes, lat.n_top_sites
         self.n_cells = self.n_bulk_cells + self.n_sites
-        top_gid = lay.nodes["gid"][sim.top_node[sim.own_sites]]
-        self.top_gid = top_gid.astype(np.int64)
-        self.bottom_gid_of_site = lambda q: lat.gid(BOTTOM, lat.bottom.rows - 1, q)
+        lo, hi = lay.owned_sites() if lat.has_interface else (0, 0)
+        self.top_gid = lat.gid(TOP, 0, np.arange(lo, hi)).astype(np.int64)
+        # A bond to a rigid substrate has no substrate node: drawn, like a broken bond, as a point-line.
+        self.bottom_gid_of_site = ((lambda q: np.full(np.shape(q), -1, np.int64)) if lat.rigid else
+                                   (lambda q: lat.gid(BOTTOM, lat.bottom.rows - 1, q)))
         self._create(st, provenance or {})
 
     # ------------------------------------------------------------ plumbing --
@@ -207,12 +211,14 @@ class Output:
                 v["Types"][j * M:(j + 1) * M] = VTK_LINE
 
     # --------------------------------------------------------------- writes --
-    def interface_frame(self, k, t, intact, ux, uy, partner, sxy, syy):
-        sl = (k, slice(self.site0, self.site0 + len(intact)))
-        for name, data in zip(FRAME_FIELDS, (intact, partner, ux, uy, sxy, syy)):
-            self._put(f"interface/{name}", sl, data)
+    def interface_frames(self, k0, count, frames):
+        """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites."""
+        ns = frames.intact.shape[1]
+        sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
+        for name in FRAME_FIELDS:
+            self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         if self.f is not None:
-            self.f["interface"].attrs["frames_written"] = k + 1
+            self.f["interface"].attrs["frames_written"] = k0 + count
 
     def snapshot(self, k, t, pos, vel, sig, partner):
         N, M = self.n_nodes, self.n_cells
@@ -228,7 +234,8 @@ class Output:
         self._put("VTKHDF/CellData/interface", (slice(c0, c0 + nb),), np.zeros(nb, np.uint8))
         self._put("VTKHDF/CellData/intact", (slice(c0, c0 + nb),), np.ones(nb, np.uint8))
         ns = len(partner)
-        other = np.where(partner >= 0, self.bottom_gid_of_site(np.maximum(partner, 0)), self.top_gid)
+        other = self.bottom_gid_of_site(np.maximum(partner, 0))
+        other = np.where((partner >= 0) & (other >= 0), other, self.top_gid)
         iface = np.stack([self.top_gid, other], axis=1).astype(np.int64)   # broken: a point-line
         i0 = k * M + self.n_bulk_cells + self.site0
         self._put("VTKHDF/Connectivity", (slice(2 * i0, 2 * (i0 + ns)),), iface.ravel())

@@ -1,0 +1,225 @@
+"""One rank's evolving state, and reading or writing it by global node id.
+
+Responsible for the arrays the loop advances (``loop.Levels``, ``loop.Iface``,
+the drive's reference) and for every view of them that other parts need in
+global numbering: snapshots, checkpoints, tests that compare runs by global
+id.  Displacements u from the reference lattice are stored, never absolute
+positions, so float32 keeps the strain.
+
+Level ``n % 2`` holds u(n) and level ``(n + 1) % 2`` holds u(n - 1) at step n.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.lattice import BOTTOM, DIRECTIONS, TOP
+from ..model.physics import DENSITY, ROW_HEIGHT
+from ..parallel.layout import PAD
+from .kernels import interface as ik
+from .loop import Iface, Levels
+
+
+def stiffness_constants(kn: float, kt: float) -> np.ndarray:
+    """[k_n, k_t, A, B, C] of ``kernels.stencil``: A = (k_n-k_t)/4 + k_t, B = sqrt(3)(k_n-k_t)/4, C = 3(k_n-k_t)/4 + k_t."""
+    d = kn - kt
+    return np.array([kn, kt, d / 4 + kt, np.sqrt(3.0) * d / 4, 3 * d / 4 + kt])
+
+
+class State:
+    """The arrays of one rank, built from the layout, in float type ``dtype``."""
+
+    def __init__(self, setup, layout, dtype=np.float64):
+        self.setup, self.layout = setup, layout
+        self.dtype = dt = np.dtype(dtype)
+        lat, mat, sc = setup.lattice, setup.material, setup.scene
+        bl, tl = layout.blocks
+
+        def block(b):
+            return np.zeros(b.shape, dt)
+
+        self.levels = Levels(*(block(bl) for _ in range(4)), *(block(tl) for _ in range(4)))
+        self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom),
+                           stiffness_constants(mat.kn_top, mat.kt_top)], dt)
+        self.drive0 = block(tl)
+
+        # Interface ------------------------------------------------------------
+        wt, wb = tl.width, bl.width
+        partner = np.full(wt, -1, np.int64)
+        reach = layout.reach
+        geom = np.zeros(ik.G_SIZE, np.int64)
+        consts = np.zeros(ik.P_SIZE, dt)
+        if lat.has_interface:
+            lo, hi = tl.j(tl.stored[0])
+            partner[lo:hi] = np.arange(lo, hi) + tl.base          # each top site faces the bottom site of its column
+            br = bl.rows - 1
+            geom[:] = [tl.base, lo, hi, *tl.j(tl.owned[0]), bl.base, *bl.j(bl.stored[br]),
+                       *bl.j(bl.owned[br]), bl.prow(br), reach.window, tl.span[0], tl.span[1] - 1, lat.bottom.cols,
+                       int(lat.rigid), reach.top_cover, reach.bottom_cover]
+            if lat.rigid:                     # a rigid substrate feels no reaction: no owned substrate sites
+                geom[ik.G_BOWN0] = geom[ik.G_BOWN1] = geom[ik.G_BLO]
+            consts[:] = [sc["interface.delta0"], sc["interface.delta_b"], sc["interface.kx"], sc["interface.ky"],
+                         float(sc["interface.reform_x0"] == "zero"), reach.drift, 1.0 / setup.l,
+                         1.0 / (DENSITY * mat.c_r ** 2)]
+        self.iface = Iface(partner=partner, x0=np.zeros(wt, dt), claim=np.zeros(wt, np.int64),
+                           taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
+                           exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
+                           zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,
+                           counters=np.zeros(2, np.int64), reach=np.full(1, -1, np.int64))
+        self._index_owned()
+
+    # ------------------------------------------------------------ numbering --
+    def _index_owned(self):
+        """(block, row, local column) of every OWNED node, in global id order (column by column, substrate
+        rows first), and the reference positions (a)."""
+        lay, lat = self.layout, self.setup.lattice
+        c0, c1 = lay.col_range
+        blk, row, col = [], [], []
+        for b in (BOTTOM, TOP):
+            if not lat.numbered[b]:
+                continue
+            B = lat.blocks[b]
+            cols = np.arange(max(c0, B.col0), min(c1, B.col0 + B.cols))
+            if len(cols) == 0:
+                continue
+            rr, cc = np.meshgrid(np.arange(B.rows), cols)
+            blk.append(np.full(rr.size, b))
+            row.append(rr.ravel())
+            col.append(cc.ravel())
+        if blk:
+            blk, row, col = (np.concatenate(v).astype(np.int64) for v in (blk, row, col))
+            order = np.lexsort((row, blk, col))          # by column, then block, then row
+            blk, row, col = blk[order], row[order], col[order]
+        else:
+            blk = row = col = np.zeros(0, np.int64)
+        self.own_block, self.own_row, self.own_col = blk, row, col
+        bases = np.array([lay.blocks[BOTTOM].base, lay.blocks[TOP].base])
+        self.own_j = col - bases[blk] if len(blk) else col
+        self.own_prow = row + PAD
+        self.gid = lat.gid(blk, row, col) if len(blk) else np.zeros(0, np.int64)
+        ref_x = np.empty(len(blk))
+        ref_y = np.empty(len(blk))
+        for b in (BOTTOM, TOP):
+            m = blk == b
+            B = lat.blocks[b]
+            ref_x[m] = col[m] + B.offset(row[m])
+            ref_y[m] = B.y0 + row[m] * ROW_HEIGHT
+        self.ref_x, self.ref_y = ref_x, ref_y
+
+    @property
+    def n_owned(self) -> int:
+        return len(self.gid)
+
+    def nodes(self) -> dict:
+        """The OWNED nodes in global id order: gid, block, row, col, and reference x, y (a)."""
+        return dict(gid=self.gid, block=self.own_block, row=self.own_row, col=self.own_col, x=self.ref_x,
+                    y=self.ref_y)
+
+    def fixed(self) -> np.ndarray:
+        """OWNED nodes the loop never moves: the substrate's bottom row AB."""
+        lat = self.setup.lattice
+        return (self.own_block == BOTTOM) & (self.own_row == 0) if lat.numbered[BOTTOM] else \
+            np.zeros(self.n_owned, bool)
+
+    def level(self, n: int):
+        """(bx, by, tx, ty) of level n % 2."""
+        lv = self.levels
+        return (lv.bx0, lv.by0, lv.tx0, lv.ty0) if n % 2 == 0 else (lv.bx1, lv.by1, lv.tx1, lv.ty1)
+
+    def owned_u(self, n: int) -> np.ndarray:
+        """u(n) of the OWNED nodes, (n_owned, 2) float64 in global id order (a)."""
+        bx, by, tx, ty = self.level(n)
+        out = np.zeros((self.n_owned, 2))
+        for b, (ax, ay) in ((BOTTOM, (bx, by)), (TOP, (tx, ty))):
+            m = self.own_block == b
+            out[m, 0] = ax[self.own_prow[m], self.own_j[m]]
+            out[m, 1] = ay[self.own_prow[m], self.own_j[m]]
+        return out
+
+    def set_owned_u(self, n: int, u: np.ndarray):
+        """Write u (n_owned, 2), in global id order, into level n % 2 (OWNED nodes only)."""
+        bx, by, tx, ty = self.level(n)
+        for b, (ax, ay) in ((BOTTOM, (bx, by)), (TOP, (tx, ty))):
+            m = self.own_block == b
+            ax[self.own_prow[m], self.own_j[m]] = u[m, 0]
+            ay[self.own_prow[m], self.own_j[m]] = u[m, 1]
+
+    # ------------------------------------------------------------ interface --
+    def owned_sites(self) -> slice:
+        """Local columns of the OWNED top interface sites."""
+        g = self.iface.geom
+        return slice(int(g[ik.G_TOWN0]), int(g[ik.G_TOWN1]))
+
+    def site0(self) -> int:
+        """Global index (0 = the block's first column) of the first OWNED interface site."""
+        lo, _ = self.layout.owned_sites()
+        return lo - self.setup.lattice.top.col0
+
+    def owned_partner(self) -> np.ndarray:
+        return self.iface.partner[self.owned_sites()].copy()
+
+    def owned_x0(self) -> np.ndarray:
+        return self.iface.x0[self.owned_sites()].astype(np.float64)
+
+    def max_top_slip(self, n: int) -> float:
+        """max |u_x| of the OWNED top interface sites at step n (a)."""
+        _, _, tx, _ = self.level(n)
+        s = self.owned_sites()
+        return float(np.max(np.abs(tx[PAD, s]))) if s.stop > s.start and self.setup.lattice.has_interface else 0.0
+
+    # ------------------------------------------------------------- fields ----
+    def potential_energy(self, n: int, load: float) -> float:
+        """Potential energy of the OWNED part at step n, in m c^2 (``load``: the factor on F_N):
+        bulk bonds (``kernels.diagnostics.bond_energy``), interface bonds
+        1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 on their top node, and the load's -F . u."""
+        from .kernels.diagnostics import bond_energy
+        e = np.zeros(self.n_owned)
+        bond_energy(*self.level(n), self.own_block, self.own_prow, self.own_j, self.block_geometry(),
+                    self.stiffness(), DIRECTIONS, e)
+        total = float(e.sum())
+        lat, sc = self.setup.lattice, self.setup.scene
+        if lat.has_interface:
+            bx, by, tx, ty = self.level(n)
+            g = self.iface.geom
+            s = self.owned_sites()
+            p = self.iface.partner[s]
+            bonded = p >= 0
+            j = np.arange(s.start, s.stop)[bonded]
+            i = p[bonded] - g[ik.G_BBASE]
+            br = int(g[ik.G_BROW])
+            dx = (j + g[ik.G_TBASE] - p[bonded]) + (tx[PAD, j].astype(float) - bx[br, i])
+            dy = sc["interface.delta0"] + (ty[PAD, j].astype(float) - by[br, i])
+            total += float(np.sum(0.5 * sc["interface.kx"] * (dx - self.iface.x0[j]) ** 2 +
+                                  0.5 * sc["interface.ky"] * (dy - sc["interface.delta0"]) ** 2))
+            top_row = (self.own_block == TOP) & (self.own_row == lat.top.rows - 1)
+            u = self.owned_u(n)
+            total -= load * (-sc["load.FN"] / lat.top.cols) * float(u[top_row, 1].sum())
+        return total
+
+    def block_geometry(self) -> np.ndarray:
+        """[first array row, end array row, first array column, end array column, parity] of each block's
+        nodes (``kernels.diagnostics``)."""
+        out = []
+        for b in (BOTTOM, TOP):
+            B = self.layout.blocks[b]
+            out.append([PAD, B.rows + PAD, B.j(B.span[0]), B.j(B.span[1]), B.parity])
+        return np.array(out, np.int64)
+
+    def stiffness(self) -> np.ndarray:
+        m = self.setup.material
+        return np.array([[m.kn_bottom, m.kt_bottom], [m.kn_top, m.kt_top]])
+
+    def node_fields(self, n: int):
+        """OWNED nodes at step n: positions (N, 3) in a, half-step velocities (u(n) - u(n-1))/dt (N, 3)
+        in internal units, virial stress (N, 3) [sxx, syy, sxy] in rho c_r^2."""
+        from .kernels.diagnostics import node_stress
+        u = self.owned_u(n)
+        v = (u - self.owned_u(n - 1)) / self.setup.dt
+        pos = np.zeros((self.n_owned, 3))
+        pos[:, 0] = self.ref_x + u[:, 0]
+        pos[:, 1] = self.ref_y + u[:, 1]
+        vel = np.zeros((self.n_owned, 3))
+        vel[:, :2] = v
+        sig = np.zeros((self.n_owned, 3))
+        node_stress(*self.level(n), self.own_block, self.own_prow, self.own_j, self.block_geometry(),
+                    self.stiffness(), DIRECTIONS, 0.5 / self.setup.material.c_r ** 2, sig)
+        return pos, vel, sig
