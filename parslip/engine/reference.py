@@ -1,34 +1,50 @@
-"""One rank's state and the time loop that advances it.
+"""The reference implementation: the first engine's plain, serial time step.
 
-Responsible for building one rank's arrays from the decomposition
-(``Simulation``) and running the load phases: ramp F_N, settle, drive.  The
-time loop is the same on one rank and on many: it calls compiled kernels,
-then the exchanger it was given.
-
-Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
+Responsible for nothing on the run path.  It holds the whole lattice as one
+array of nodes in global id order, gathers each node's neighbours by index
+and sums each bond's force on its own (``kernels.reference``), then calls
+Python per step: slow, and easy to read.  The tests compare the compiled
+loop with it step by step, by global id, and use its energy and force
+kernels as an independent computation.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .kernels import reference as kernels
-from ..errors import NonFiniteError, SlipReachError
+from ..errors import NonFiniteError
 from ..model.lattice import DIRECTIONS, TOP
 from ..model.physics import DENSITY
-from ..parallel.decomposition import NullExchanger, build_layout
 from ..scene.derive import Setup
 
 
-class Simulation:
-    """One rank's share of the lattice and the loop that advances it."""
+class _SerialLayout:
+    """The whole lattice on one rank: nodes in global id order and the interface sites."""
 
-    def __init__(self, setup: Setup, exchanger=None, comm=None):
+    def __init__(self, lat):
+        self.rank, self.size = 0, 1
+        self.nodes = nodes = lat.nodes_in_columns(0, lat.ncols)
+        self.n_owned = len(nodes["gid"])
+        top = np.flatnonzero(lat.is_top_site(nodes))
+        self.top_node = top[np.argsort(nodes["gid"][top], kind="stable")].astype(np.int64)
+        self.top_gsite = lat.top_site_of_col(nodes["col"][self.top_node]).astype(np.int64)
+        self.top_owned = np.ones(len(self.top_node), bool)
+        bot = np.flatnonzero(lat.is_bottom_site(nodes))
+        self.bot_node = bot[np.argsort(nodes["col"][bot], kind="stable")].astype(np.int64)
+        self.bot_gsite0 = 0
+
+
+
+
+class Simulation:
+    """The whole lattice and a plain time step (one rank only)."""
+
+    def __init__(self, setup: Setup):
         self.setup = setup
-        self.ex = exchanger or NullExchanger()
-        self.comm = comm
-        rank, size = self.ex.rank, self.ex.size
         s, lat, mat = setup.scene, setup.lattice, setup.material
-        self.layout = lay = build_layout(lat, rank, size, setup.slip_reach)
+        if lat.rigid:
+            raise NotImplementedError("the reference implementation has no rigid substrate")
+        self.layout = lay = _SerialLayout(lat)
         nodes = lay.nodes
         n_loc, n_own = len(nodes["gid"]), lay.n_owned
         self.n_owned = n_own
@@ -87,7 +103,6 @@ class Simulation:
     def step(self):
         """Advance the state from step n to n+1 (positions u(n) -> u(n+1))."""
         st, n = self.setup, self.n
-        lay = self.layout
         drive_on = n >= st.n_drive_start and st.scene["drive.mode"] != "none"
         if n == st.n_drive_start:
             self.u_drive0[:] = self.u[:, 0]
@@ -100,41 +115,18 @@ class Simulation:
         if len(self.top_node):
             kernels.interface_forces(self.u, self.ref_x, self.top_node, self.top_owned, self.partner, self.x0,
                                      self.bot_node, self.bot_g0, self.delta0, self.kx, self.ky, self.f, self.react)
-        self.ex.reverse_add(lay.react_channel, self.react)
         shift = st.v0 * ((n + 1 - st.n_drive_start) * st.dt)
         bad = kernels.verlet_update(self.u, self.u_prev, self.f, self.react, self.fext, self.load_factor(n),
                                     self.kind, self.u_drive0, shift, drive_on, st.dt, self.zeta, self.n_owned)
         if bad >= 0 and self.first_bad is None:
             self.first_bad = (n + 1, bad)
-        self.ex.forward(lay.node_channel, self.u)
-        if st.lattice.has_interface:     # global, not local: a rank with no top sites still serves its neighbours
-            self.ex.forward(lay.top_channel, self.partner, self.x0)
         self.n = n + 1
 
     # ----------------------------------------------------------- checks -----
     def check_health(self):
-        """Collective: stop every rank if any state went non-finite or slid past the halo."""
-        bad_step = self.first_bad[0] if self.first_bad else np.iinfo(np.int64).max
-        slip = 0.0
-        if self.ex.size > 1 and len(self.own_sites):
-            slip = float(np.max(np.abs(self.u[self.top_node[self.own_sites], 0])))
-            if len(self.own_bottom_sites):
-                slip += float(np.max(np.abs(self.u[self.own_bottom_sites, 0])))
-        if self.comm is not None and self.ex.size > 1:
-            from mpi4py import MPI
-            bad_step = self.comm.allreduce(bad_step, op=MPI.MIN)
-            slip = self.comm.allreduce(slip, op=MPI.MAX)
-        if bad_step != np.iinfo(np.int64).max:
-            mine = self.describe_bad() if self.first_bad and self.first_bad[0] == bad_step else None
-            if self.comm is not None and self.ex.size > 1:
-                found = [m for m in self.comm.allgather(mine) if m]
-                mine = min(found)[1]
-            raise NonFiniteError(mine)
-        if slip > self.setup.slip_reach:
-            raise SlipReachError(
-                f"interface slip reached {slip:.3g} a at step {self.n}, beyond interface.slip_reach = "
-                f"{self.setup.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
-                f"interface.slip_reach={2 * slip:.3g} or with fewer ranks")
+        """Stop if the state went non-finite (the step and the node are in the message)."""
+        if self.first_bad is not None:
+            raise NonFiniteError(self.describe_bad()[1])
 
     def describe_bad(self):
         step, i = self.first_bad
