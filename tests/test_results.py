@@ -54,7 +54,7 @@ def test_snapshots_are_pyvista_meshes_at_their_times(small_run):
 def test_fronts_are_those_of_the_interface_record(small_run):
     from parslip.analysis.fronts import fronts
     run = parslip.open(small_run)
-    assert [f.t_start for f in run.fronts()] == [f.t_start for f in fronts(run.interface)]
+    assert [f.nucleation_time for f in run.fronts()] == [f.nucleation_time for f in fronts(run.interface)]
     assert run.fronts() and run.fronts()[0].direction == 1
 
 

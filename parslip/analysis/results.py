@@ -42,6 +42,20 @@ class Run:
         self.path = str(path)
         self._reader = None
 
+    @classmethod
+    def from_arrays(cls, interface: dict, scene: dict | None = None, attrs: dict | None = None) -> "Run":
+        """A result object over arrays already in memory (same keys and units as ``interface``), without
+        snapshots: for records built by hand or cut from another run."""
+        self = cls.__new__(cls)
+        self.path, self._reader = "<memory>", None
+        iface = dict(interface)
+        iface.setdefault("t", iface.get("time"))
+        iface.setdefault("time", iface["t"])
+        # cached_property reads the instance dict first: fill it instead of the file.
+        self.__dict__.update(interface=iface, scene=dict(scene or {}), attrs=dict(attrs or {}),
+                             snapshot_times=np.zeros(0))
+        return self
+
     def __repr__(self) -> str:
         s = self.scene
         return (f"<parslip run {self.path!r}: {s.get('drive.mode')} v0/c_r = {s.get('drive.v0')}, "
