@@ -53,6 +53,18 @@ def _title(run) -> str:
     return f"{os.path.basename(run.path)}: {run.mode}, v0/c_r = {run.v0:g}"
 
 
+def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, legend: bool = True) -> list[str]:
+    """Label a column of axes (x label on the last), legend and run title on the first, then save."""
+    axes = list(np.atleast_1d(axes))
+    for ax, yl in zip(axes, ylabels):
+        ax.set_ylabel(yl)
+    axes[-1].set_xlabel(xlabel)
+    if legend:
+        axes[0].legend(fontsize=7)
+    axes[0].set_title(_title(run), fontsize=8)
+    return save(fig, out_dir, name)
+
+
 # --- space-time and speeds ------------------------------------------------------
 
 def draw_spacetime(ax, iface: dict) -> None:
@@ -91,12 +103,8 @@ def fig_front_speed(run, out_dir: str, n: int = 4) -> list[str]:
     fig, ax = plt.subplots(figsize=(5, 3.5))
     for i, f in enumerate(run.fronts()[:n]):
         ax.plot(f.tip["x"], f.tip["v"], color=colour(i), label=f"{i + 1}: {f.kind}, mean {f.mean_speed:.3g}")
-    ax.set_xlabel("x_tip / l")
-    ax.set_ylabel("v / c_r")
     ax.set_xlim(0, 1)
-    ax.legend(fontsize=7)
-    ax.set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, "front_speed")
+    return _finish(fig, ax, run, out_dir, "front_speed", "x_tip / l", ("v / c_r",))
 
 
 # --- interface stresses ---------------------------------------------------------
@@ -139,12 +147,8 @@ def fig_interface_stress(run, out_dir: str, times: list[float] | None = None) ->
             for f in fr:
                 if f.nucleation_time <= run.times[k] <= f.tip["t"][-1]:
                     ax.axvline(f.tip_at(run.times[k]) - x1, color=colour(i), ls="--", lw=0.6)
-    axes[0].set_ylabel("sigma_xy / rho c_r^2")
-    axes[1].set_ylabel("sigma_yy / rho c_r^2")
-    axes[1].set_xlabel("(x - x_tip^1) / l")
-    axes[0].legend(fontsize=7)
-    axes[0].set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, "interface_stress")
+    return _finish(fig, axes, run, out_dir, "interface_stress", "(x - x_tip^1) / l",
+                   ("sigma_xy / rho c_r^2", "sigma_yy / rho c_r^2"))
 
 
 def tip_profile(run, front, t: float, field: str = "sxy", sites: int = 8):
@@ -253,11 +257,7 @@ def fig_slip_records(run, out_dir: str, points=SLIP_POINTS) -> list[str]:
         ax.plot(run.times, ux[:, s], "k", ls=ls, lw=1, label=f"x/l = {run.x[s]:.2f}")
         for i, t in passages(run, s):
             ax.plot(t, ux[run.frame_at(t), s], "o", color=colour(i), ms=4)
-    ax.set_xlabel("t c_r / l")
-    ax.set_ylabel("u / l")
-    ax.legend(fontsize=7)
-    ax.set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, "slip_records")
+    return _finish(fig, ax, run, out_dir, "slip_records", "t c_r / l", ("u / l",))
 
 
 def slip_behind_tips(run, front_index: int):
@@ -281,12 +281,7 @@ def fig_slip_behind_tips(run, out_dir: str, n: int = 4) -> list[str]:
         x, du, dv = slip_behind_tips(run, i)
         axes[0].plot(x, du, color=colour(i), label=f"front {i + 1}")
         axes[1].plot(x, dv, color=colour(i))
-    axes[0].set_ylabel("Delta u / l")
-    axes[1].set_ylabel("Delta v / l")
-    axes[1].set_xlabel("x_tip / l")
-    axes[0].legend(fontsize=7)
-    axes[0].set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, "slip_behind_tips")
+    return _finish(fig, axes, run, out_dir, "slip_behind_tips", "x_tip / l", ("Delta u / l", "Delta v / l"))
 
 
 def slip_velocity(run, x: float) -> tuple[np.ndarray, np.ndarray]:
@@ -304,9 +299,7 @@ def fig_slip_velocity(run, out_dir: str, points=SLIP_POINTS) -> list[str]:
         ax.plot(t, v, color="tab:orange", lw=0.8)
         ax.set_ylabel(f"u-dot / c_r\nx/l = {x:g}", fontsize=8)
         ax.ticklabel_format(axis="y", useOffset=False)
-    axes[-1].set_xlabel("t c_r / l")
-    axes[0].set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, "slip_velocity")
+    return _finish(fig, axes, run, out_dir, "slip_velocity", "t c_r / l", (), legend=False)
 
 
 def fig_pulse_width(run, out_dir: str, n: int = 4) -> list[str]:
@@ -315,11 +308,7 @@ def fig_pulse_width(run, out_dir: str, n: int = 4) -> list[str]:
     fig, ax = plt.subplots(figsize=(5, 3.5))
     for i, f in enumerate(run.fronts()[:n]):
         ax.plot(f.tip["x"], f.tip["w"], color=colour(i), drawstyle="steps-mid", label=f"front {i + 1} ({f.kind})")
-    ax.set_xlabel("x_tip / l")
-    ax.set_ylabel("width / a")
-    ax.legend(fontsize=7)
-    ax.set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, "pulse_width")
+    return _finish(fig, ax, run, out_dir, "pulse_width", "x_tip / l", ("width / a",))
 
 
 # --- stress maps (rendered by parslip.analysis.render when present) --------------
