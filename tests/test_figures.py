@@ -53,6 +53,18 @@ def test_stress_profiles_and_leading_tip(small_run):
     assert rows and all(r["front"] in (1, 2, 3) for r in rows)
 
 
+def test_a_lone_front_is_profiled_along_its_run():
+    """One crack across the contact (as in T0): four moments from its start to its end (Fig. 7b)."""
+    from helpers import blank, draw
+    from parslip.analysis.results import Run
+    iface = blank(200)
+    arr = draw(iface, 30, 0, +1, 2, 1, 0.01, crack=True)
+    run = Run.from_arrays(iface, {"drive.mode": "shear", "drive.v0": 1e-4})
+    t = run.times[arr]
+    assert figures.stress_times(run) == pytest.approx([t[0], t[20], t[39], t[-1]])
+    assert figures.map_times(run) == pytest.approx([t[0], t[30], t[-1]])
+
+
 def test_slip_behind_tips_subtracts_the_drive_to_the_previous_nucleation(small_run):
     run = parslip.open(small_run)
     fr = run.fronts()

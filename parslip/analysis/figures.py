@@ -119,12 +119,12 @@ def leading_tip(fronts: list, t: float):
 
 
 def stress_times(run, n: int = 4) -> list[float]:
-    """Times for the interface-stress profiles: the first ``n`` nucleations (Figs. 3b, 5b), or, when the
-    first front is a crack, ``n`` moments along its run (Fig. 7b)."""
+    """Times for the interface-stress profiles: the first ``n`` nucleations when the run has a train of
+    fronts (Figs. 3b, 5b); ``n`` moments along the first front's run when it has one (Fig. 7b)."""
     fr = run.fronts()
     if not fr:
         return []
-    if fr[0].kind == "crack":
+    if len(fr) == 1:
         tt = fr[0].tip["t"]
         return [float(tt[int(round(q * (len(tt) - 1)))]) for q in np.linspace(0, 1, n)]
     return [f.nucleation_time for f in fr[:n]]
@@ -315,12 +315,12 @@ def fig_pulse_width(run, out_dir: str, n: int = 4) -> list[str]:
 
 def map_times(run) -> list[float]:
     """Times of the stress maps (Figs. 3a, 5a, 7a, 8): the first front's nucleation, the fourth's (or
-    the last one's) and where the first accelerates (or ends); for a crack, its start, middle and end."""
+    the last one's) and where the first accelerates (or ends); for a lone front, its start, middle and end."""
     fr = run.fronts()
     if not fr:
         return [float(run.times[-1])] if len(run.times) else []
     f = fr[0]
-    if f.kind == "crack":
+    if len(fr) == 1:
         tt = f.tip["t"]
         return [float(tt[0]), float(tt[len(tt) // 2]), float(tt[-1])]
     t_acc = f.tip["t"][np.flatnonzero(f.tip["x"] == f.accel_x)[0]] if f.accel_x is not None else f.tip["t"][-1]
@@ -341,7 +341,8 @@ def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> lis
     out = []
     for field in fields:
         for t in (map_times(run) if times is None else times):
-            png = os.path.join(out_dir, f"map_{field}_t{t:07.2f}.png")
+            t_snap = float(run.snapshot_times[np.argmin(np.abs(run.snapshot_times - t))])   # what gets drawn
+            png = os.path.join(out_dir, f"map_{field}_t{t_snap:07.2f}.png")
             render.render_frame(run, field, t, png)
             out.append(png)
     return out
