@@ -188,24 +188,29 @@ def chains(iface: dict, max_gap: float = 3.0) -> list[_Chain]:
     return out
 
 
-def _local_speed(tt: np.ndarray, xx: np.ndarray, d: int, dt_frame: float, h: int) -> np.ndarray:
-    """v_j = d / max(d * dt_arr/dx, dt_frame / span): t_arr regressed on x over sites j-h..j+h.
+def _fit_speed(xs: np.ndarray, ts: np.ndarray, d: int, dt_frame: float) -> float:
+    """Signed speed d / max(d * dt_arr/dx, dt_frame / span) from arrival times ``ts`` at sites ``xs``.
 
-    The arrival times carry the frame quantisation, x is exact, so t is
-    regressed on x.  A window that the tip crossed within one frame only
-    bounds the speed: it is capped at the window's span per frame.
+    The arrival times carry the frame quantisation while x is exact, so t is
+    regressed on x.  Sites the tip crossed within one frame only bound the
+    speed: it is capped at their span per frame.  NaN for a single site.
     """
+    span = float(np.ptp(xs))
+    if span == 0:
+        return math.nan
+    slope = float(np.polyfit(xs, ts, 1)[0])
+    return d / max(d * slope, dt_frame / span)
+
+
+def _local_speed(tt: np.ndarray, xx: np.ndarray, d: int, dt_frame: float, h: int) -> np.ndarray:
+    """Local tip speed at each site j: ``_fit_speed`` over sites j-h..j+h (the neighbours at a lone site)."""
     n = len(xx)
     v = np.empty(n)
     for j in range(n):
         lo, hi = max(0, j - h), min(n, j + h + 1)
-        if hi - lo < 2:                 # a one-site window: use the neighbours
+        if hi - lo < 2:
             lo, hi = max(0, j - 1), min(n, j + 2)
-        xs, ts = xx[lo:hi], tt[lo:hi]
-        span = float(np.ptp(xs))
-        slope = float(np.polyfit(xs, ts, 1)[0]) if span > 0 else 0.0
-        floor = dt_frame / span if span > 0 else np.inf
-        v[j] = d / max(d * slope, floor) if span > 0 else np.nan
+        v[j] = _fit_speed(xx[lo:hi], tt[lo:hi], d, dt_frame)
     return v
 
 
@@ -225,9 +230,7 @@ def _front(c: _Chain, iface: dict, h: int, windows: dict) -> Front:
         span_t = tt[-1] - tt[0]
         mean = (xx[-1] - xx[0]) / span_t if span_t > 0 else d * abs(xx[-1] - xx[0]) / dt_frame
         lo, hi = int(0.2 * n), max(int(0.8 * n), int(0.2 * n) + 2)
-        mid_span = float(np.ptp(xx[lo:hi]))
-        slope = float(np.polyfit(xx[lo:hi], tt[lo:hi], 1)[0]) if mid_span > 0 else 0.0
-        steady = 1.0 / max(abs(slope), dt_frame / mid_span) if mid_span > 0 else math.nan
+        steady = abs(_fit_speed(xx[lo:hi], tt[lo:hi], d, dt_frame))
         early = float(np.median(np.abs(v[: max(1, n // 2)])))
         fast = np.flatnonzero(np.abs(v) > ACCEL_FACTOR * early)
         accel = float(xx[fast[0]]) if len(fast) else None
