@@ -127,3 +127,15 @@ def test_bad_input_one_line(argv, message, small_run, tmp_path, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err
+
+
+def test_a_run_without_fronts_still_gets_its_figures(tmp_path):
+    """Before the first break (a short shear run) every figure is drawn, empty where there is no front."""
+    from helpers import blank
+    from parslip.analysis.results import Run
+    iface = blank(50)
+    iface["sxy"] = iface["syy"] = np.zeros_like(iface["ux"])
+    run = Run.from_arrays(iface, {"drive.mode": "shear", "drive.v0": 1e-4})
+    paths = figures.write_all(run, str(tmp_path))
+    assert sum(p.endswith(".png") for p in paths) == 8          # all but the stress maps (no snapshots)
+    assert (tmp_path / "mode2_fit.csv").read_text().count("\n") == 1

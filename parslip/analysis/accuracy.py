@@ -263,7 +263,7 @@ PARETO = ("speed", "spacetime", "first_break_t")
 
 def pareto_png(rows: list[dict], out_dir: str) -> list[str]:
     """Error against wall time, one panel per metric in PARETO, one colour per knob (log-log)."""
-    from .figures import _plt, save
+    from .figures import _legend, _plt, save
     plt = _plt()
     fig, axes = plt.subplots(1, len(PARETO), figsize=(4.5 * len(PARETO), 3.8))
     knobs = sorted({r["knob"] for r in rows})
@@ -280,7 +280,7 @@ def pareto_png(rows: list[dict], out_dir: str) -> list[str]:
         ax.set_yscale("log")
         ax.set_xlabel("wall time / s")
         ax.set_ylabel(f"{m} error ({UNITS[m]}; 0 drawn at 1e-6)")
-        ax.legend(fontsize=6)
+        _legend(ax, 6)
     return save(fig, out_dir, "accuracy_pareto")
 
 

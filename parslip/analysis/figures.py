@@ -53,6 +53,12 @@ def _title(run) -> str:
     return f"{os.path.basename(run.path)}: {run.mode}, v0/c_r = {run.v0:g}"
 
 
+def _legend(ax, size: int) -> None:
+    """A legend when something is labelled (a run without fronts has nothing to list)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=size)
+
+
 def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, legend: bool = True) -> list[str]:
     """Label a column of axes (x label on the last), legend and run title on the first, then save."""
     axes = list(np.atleast_1d(axes))
@@ -60,7 +66,7 @@ def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, legen
         ax.set_ylabel(yl)
     axes[-1].set_xlabel(xlabel)
     if legend:
-        axes[0].legend(fontsize=7)
+        _legend(axes[0], 7)
     axes[0].set_title(_title(run), fontsize=8)
     return save(fig, out_dir, name)
 
@@ -219,7 +225,7 @@ def fig_mode2(run, out_dir: str, n_fronts: int = 3) -> tuple[list[str], list[dic
             ax.plot(xx, r["K_II"] / np.sqrt(2 * np.pi * (xx + r["x_p"])), "--", color=c, lw=1)
     ax.set_xlabel("distance ahead of the tip / l")
     ax.set_ylabel("sigma_xy / rho c_r^2")
-    ax.legend(fontsize=6)
+    _legend(ax, 6)
     ax.set_title(_title(run) + "\nK_II in rho c_r^2 l^1/2, x_p in l", fontsize=8)
     paths = save(fig, out_dir, "mode2_fit")
     csv = os.path.join(out_dir, "mode2_fit.csv")
@@ -401,5 +407,5 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
         ax.set_title(f"front {i + 1}", fontsize=9)
         ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
         ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")
-        ax.legend(fontsize=6)
+        _legend(ax, 6)
     return save(fig, out_dir, name), rows
