@@ -72,3 +72,20 @@ def test_scenes_exist():
     here = os.path.join(os.path.dirname(__file__), "..", "run")
     for name in paper.SCENES.values():
         assert os.path.exists(os.path.join(here, name)), name
+
+
+def test_reproduce_from_a_directory_of_runs(small_run, tmp_path):
+    """With only a push run present: its figure set, and a table that says what was not run."""
+    import os
+    runs_dir, out = tmp_path / "runs", tmp_path / "out"
+    runs_dir.mkdir()
+    os.symlink(small_run, runs_dir / "push.vtkhdf")
+    runs = paper.reproduce(str(runs_dir), str(out))
+    assert set(runs) == {"push"}
+    assert (out / "push" / "spacetime.png").exists() and (out / "push" / "front_speed.pdf").exists()
+    md = (out / "comparison.md").read_text()
+    rows = paper.comparison(runs)
+    assert md == paper.markdown(rows)
+    assert row(rows, "T+ first four").get("parslip") == "not run (pull)"
+    times = [f.nucleation_time for f in runs["push"].fronts() if f.nucleation_x < 0.05][:4]
+    assert row(rows, "T- first four").get("parslip") == ", ".join(f"{t:.3g}" for t in times)
