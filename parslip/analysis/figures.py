@@ -374,10 +374,22 @@ def write_all(run, out_dir: str, only=None) -> list[str]:
 
 # --- several runs ------------------------------------------------------------------
 
+def _clip_to_steady(ax, factor: float = 4.0) -> None:
+    """Limit the y axis to ``factor`` x the largest median |y| of the curves: the steady stretch, where
+    v/v0 curves should coincide, stays readable beside the final acceleration to c_r (which, divided by
+    a small v0, is thousands)."""
+    ys = [np.abs(line.get_ydata()) for line in ax.get_lines() if len(line.get_ydata())]
+    if ys:
+        m = factor * max(float(np.median(y)) for y in ys)
+        neg = any(np.median(line.get_ydata()) < 0 for line in ax.get_lines() if len(line.get_ydata()))
+        ax.set_ylim(-m if neg else 0.0, m if not neg else 0.0)
+
+
 def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", name: str = "compare_speed"):
     """Front speed of the first ``n`` fronts of several runs, one panel per front.
 
     scale ``v0``: v/v0 against x_tip/l (Fig. 2d, the v0 sweep, where v is proportional to v0);
+    the y axis is clipped to the steady stretch (``_clip_to_steady``);
     ``c_r``: |v|/c_r against the distance from the nucleation site (appendix D, push against pull,
     which run in opposite directions).  ``auto``: v0 when the runs' v0 differ.  Returns the paths
     and rows of (run, mode, v0, front, mean speed in c_r, mean speed / v0).
@@ -404,6 +416,8 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
                          "mean_speed": f.mean_speed, "mean_speed_over_v0": f.mean_speed / run.v0})
     for i in range(n):
         ax = axes[0, i]
+        if scale == "v0":
+            _clip_to_steady(ax)
         ax.set_title(f"front {i + 1}", fontsize=9)
         ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
         ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")
