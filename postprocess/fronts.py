@@ -1,15 +1,19 @@
 """Rupture-front catalogue of a run: first break, then each front's nucleation
-time and place, direction and speed (x in l, t in l/c_r, v in c_r).
+time and place, direction, kind, speeds, width and slip (x in l, t in l/c_r,
+v in c_r, width in a).  The same as `parslip fronts RUN`.
 
     python postprocess/fronts.py out/push.vtkhdf [--max-gap 3.0]
 """
 import argparse
 
 from parslip import analysis
+from parslip.analysis.fronts import table
 
 p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 p.add_argument("h5")
-p.add_argument("--max-gap", type=float, default=3.0, help="largest time between linked breaks, l/c_r")
+p.add_argument("--max-gap", type=float, default=3.0, help="longest pause of a tip whose bond re-attached, l/c_r")
 a = p.parse_args()
 iface = analysis.load_interface(a.h5)
-print(analysis.summary(iface))
+t0, x0 = analysis.first_break(iface)
+print("no bond broke" if t0 is None else f"first break at t = {t0:.3f} l/c_r, x/l = {x0[:6].round(3).tolist()}")
+print(table(analysis.fronts(iface, max_gap=a.max_gap)))

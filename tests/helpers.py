@@ -66,3 +66,41 @@ def reference(sim: Simulation) -> ReferenceSimulation:
     ref.x0[ref.own_sites] = sim.state.owned_x0()
     ref.n = sim.n
     return ref
+
+
+# --- drawn interface records with known rupture fronts (front detector, paper table, accuracy) ---
+
+DT = 0.05          # l/c_r per frame
+NS = 60            # sites: dx = 1/60 l
+
+
+def blank(nf):
+    x = (np.arange(NS) + 0.5) / NS
+    return {"t": np.arange(nf) * DT, "x": x, "intact": np.ones((nf, NS), np.uint8),
+            "ux": np.zeros((nf, NS)), "uy": np.zeros((nf, NS))}
+
+
+def draw(iface, k0, s0, d, fps, width, slip, crack=False, sites=None, slip_v=0.0):
+    """Tip at site s0 + d*j from frame k0 + fps*j; the `width` sites behind it broken (a crack keeps all).
+
+    A pulse adds `slip` to ux (and `slip_v` to uy) at a site from the frame it re-bonds; a crack from the
+    frame it breaks.  Returns the arrival frames.
+    """
+    nf = len(iface["t"])
+    n = sites or (NS - s0 if d > 0 else s0 + 1)
+    arr = k0 + fps * np.arange(n)
+    for k in range(k0, nf):
+        j = min((k - k0) // fps, n - 1)
+        tip = s0 + d * j
+        back = j if crack else min(width - 1, j)
+        lo, hi = sorted((tip, tip - d * back))
+        iface["intact"][k, lo:hi + 1] = 0
+        if not crack and j == n - 1 and k >= arr[-1] + fps:
+            break                                   # the pulse has left through the far edge
+    for j in range(n):
+        s = s0 + d * j
+        on = np.flatnonzero(iface["intact"][arr[j]:, s] == 1)
+        k_slip = arr[j] if crack else arr[j] + on[0]
+        iface["ux"][k_slip:, s] += slip
+        iface["uy"][k_slip:, s] += slip_v
+    return arr

@@ -1,15 +1,17 @@
-"""Reading the interface record back: rupture fronts and the space-time plot.
+"""Rupture fronts from the interface record: detection, tip trajectory, kind, width, slip.
 
-Responsible for what the acceptance checks and the postprocess scripts
-compute from ``/interface``: when and where bonds first break, each rupture
-front (a connected patch of broken bonds in the x-t plane) with its
-nucleation point, direction and speed, and the paper-style space-time PNG
-(intact bonds yellow, broken white).  Speeds come out in units of c_r
-because x is in l and t in l/c_r.
+Responsible for the front catalogue that ``parslip fronts``, ``parslip run``'s
+summary, the figures and the accuracy study share: when and where bonds
+first break, and each rupture front with its nucleation point, direction,
+tip trajectory and local speed, pulse-or-crack kind, width and the slip it
+carries.  Also the paper-style space-time PNG (intact bonds yellow, broken
+white).  Units: x and slip in l, t in l/c_r, so speeds come out in c_r;
+widths in lattice spacings a (one site = one a).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,17 +35,84 @@ def first_break(iface: dict):
 
 @dataclass
 class Front:
-    t_start: float      # l/c_r
-    x_start: float      # l, the site where it nucleated
-    t_end: float
-    x_far: float        # l, the site reached last
-    direction: int      # +1 toward x = 1 (front), -1 toward x = 0 (rear), 0 if it did not move
-    speed: float        # median front speed over the middle of its run, in c_r
-    sites: int          # number of sites it broke
+    """One rupture front.  Times in l/c_r, positions and slip in l, speeds in c_r (signed: + toward x/l = 1).
+
+    ``tip`` holds arrays along the tip trajectory, one entry per site the tip
+    reached, in the order it reached them:
+      t, x     arrival time of the tip at the site and the site's x (x_tip(t))
+      v        local tip speed v(x_tip), signed: 1 / (d t_arr / d x) fitted over 2 h + 1 sites
+      w        width of the broken zone behind the tip at that moment, in a
+      du, dv   slip the front carries at that site, in l: the change of u between the
+               midpoints in time to the neighbouring fronts' passages there (``_slip_windows``)
+      u_behind, v_behind   displacement of the site just behind the tip when the tip
+               arrives, from its value at t = 0 (the loaded equilibrium), in l (Sec. 3.4)
+    """
+    nucleation_time: float
+    nucleation_x: float
+    direction: int              # +1 toward x/l = 1, -1 toward x/l = 0, 0 if it did not move
+    kind: str                   # "pulse" (bonds re-attach behind the tip) or "crack"
+    mean_speed: float           # (x_last - x_first) / (t_last - t_first), signed, c_r
+    max_speed: float            # local speed of largest magnitude, signed, c_r
+    steady_speed: float         # |speed| fitted over the middle 60 % of the sites, c_r
+    accel_x: float | None       # first x_tip where |v| exceeds ACCEL_FACTOR x the early median speed
+    width: float                # median width of the broken zone behind the tip, a
+    slip_u: float               # median of tip["du"], l
+    slip_v: float               # median of tip["dv"], l
+    tip: dict = field(repr=False)
+
+    # Names the run summary and older callers use.
+    @property
+    def t_start(self) -> float:
+        return self.nucleation_time
+
+    @property
+    def x_start(self) -> float:
+        return self.nucleation_x
+
+    @property
+    def t_end(self) -> float:
+        return float(self.tip["t"][-1])
+
+    @property
+    def x_far(self) -> float:
+        return float(self.tip["x"][-1])
+
+    @property
+    def speed(self) -> float:
+        """Unsigned steady speed, c_r."""
+        return self.steady_speed
+
+    @property
+    def sites(self) -> int:
+        return len(self.tip["x"])
+
+    def speed_at(self, x: float) -> float:
+        """Local tip speed (signed, c_r) where the tip passed nearest to ``x`` (l)."""
+        return float(self.tip["v"][int(np.argmin(np.abs(self.tip["x"] - x)))])
+
+    def tip_at(self, t: float) -> float:
+        """x_tip (l) at time ``t``: the last site reached at or before ``t`` (the nucleation site before)."""
+        j = int(np.searchsorted(self.tip["t"], t, side="right")) - 1
+        return float(self.tip["x"][max(j, 0)])
+
+    def to_dict(self) -> dict:
+        """JSON-ready: the README's field names; NaN becomes None."""
+        def clean(v):
+            if isinstance(v, float) and not math.isfinite(v):
+                return None
+            return v
+        d = {k: clean(getattr(self, k)) for k in
+             ("nucleation_time", "nucleation_x", "direction", "kind", "mean_speed", "max_speed",
+              "steady_speed", "accel_x", "width", "slip_u", "slip_v")}
+        d["tip"] = {k: [clean(float(v)) for v in a] for k, a in self.tip.items()}
+        return d
+
+
+ACCEL_FACTOR = 2.0      # a front "accelerates" where |v| first exceeds this multiple of its early speed
 
 
 def break_events(iface: dict) -> tuple[np.ndarray, np.ndarray]:
-    """(frame, site) of every intact -> broken transition, in time order."""
+    """(frame, site) of every intact -> broken transition, in time order (a bond broken in frame 0 counts)."""
     broken = iface["intact"] == 0
     new = broken.copy()
     new[1:] &= ~broken[:-1]
@@ -51,46 +120,214 @@ def break_events(iface: dict) -> tuple[np.ndarray, np.ndarray]:
     return k, s
 
 
-def fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5) -> list[Front]:
-    """Rupture fronts as chains of bond-break events, site to neighbouring site.
+def _runs(sites: np.ndarray) -> list[tuple[int, int]]:
+    """Contiguous runs [a, b] of a sorted array of site indices."""
+    if len(sites) == 0:
+        return []
+    cut = np.flatnonzero(np.diff(sites) > 1)
+    starts = np.r_[sites[0], sites[cut + 1]]
+    ends = np.r_[sites[cut], sites[-1]]
+    return list(zip(starts.tolist(), ends.tolist()))
 
-    Events are taken in time order.  An event at site i joins the chain whose
-    tip (latest site) is at i-1 or i+1 and broke at most ``max_gap`` l/c_r
-    earlier (the most recent such chain); a repeat break at a chain's own tip
-    is absorbed; otherwise the event nucleates a new chain.  Pulses that
-    follow each other are told apart because each extends only from its own
-    tip.  The speed is the slope dx/dt fitted over the middle 60 % of the
-    chain's sites; chains shorter than ``min_sites`` are dropped.
+
+class _Chain:
+    """Sites a front has broken, with the frame each broke in; it grows only at its tip."""
+
+    def __init__(self, a: int, b: int, k: int):
+        self.arrival = {s: k for s in range(a, b + 1)}
+        self.lo, self.hi, self.d, self.last = a, b, 0, k
+
+    def extends(self, a: int, b: int) -> int:
+        """+1 / -1 if the run [a, b] newly covers the site just beyond hi / lo (in a direction still open), else 0."""
+        if self.d >= 0 and a <= self.hi + 1 <= b:
+            return 1
+        if self.d <= 0 and a <= self.lo - 1 <= b:
+            return -1
+        return 0
+
+    def grow(self, side: int, a: int, b: int, k: int) -> None:
+        new = range(self.hi + 1, b + 1) if side > 0 else range(a, self.lo)
+        for s in new:
+            self.arrival[s] = k
+        self.lo, self.hi = min(self.lo, a), max(self.hi, b)
+        self.d, self.last = side, k
+
+
+def chains(iface: dict, max_gap: float = 3.0) -> list[_Chain]:
+    """Break events grouped into fronts, frame by frame.
+
+    In each frame the newly broken sites form contiguous runs.  A run that
+    covers the site just beyond a chain's tip (hi + 1 for a chain moving
+    toward x = 1, lo - 1 toward x = 0; either for a chain whose direction is
+    not yet known) extends that chain, provided the chain is alive: its tip
+    bond was still broken in the previous frame, or its last advance was at
+    most ``max_gap`` l/c_r ago.  Among several candidates the most recently
+    advanced one wins.  Any other run nucleates a new chain.  A front so
+    extends only from its own tip: pulses that follow each other, or a new
+    pulse nucleating where an older one passed, stay separate.
     """
-    t, x = iface["t"], iface["x"]
-    chains: list[list[tuple[float, int]]] = []
-    for k, s in zip(*break_events(iface)):
-        tk = t[k]
-        best, best_t = None, -np.inf
-        for c in chains:
-            tt, ts = c[-1]
-            if tk - tt <= max_gap and abs(ts - s) <= 1 and tt > best_t:
-                best, best_t = c, tt
-        if best is None:
-            chains.append([(tk, s)])
-        elif best[-1][1] != s and all(site != s for _, site in best):
-            best.append((tk, s))
-    out = []
-    for c in chains:
-        if len(c) < min_sites:
-            continue
-        ts = np.array([e[0] for e in c])
-        xs = x[np.array([e[1] for e in c])]
-        lo, hi = int(0.2 * len(xs)), max(int(0.8 * len(xs)), int(0.2 * len(xs)) + 2)
-        seg_t, seg_x = ts[lo:hi], xs[lo:hi]
-        speed = abs(float(np.polyfit(seg_t, seg_x, 1)[0])) if np.ptp(seg_t) > 0 else float("inf")
-        out.append(Front(float(ts[0]), float(xs[0]), float(ts[-1]), float(xs[-1]),
-                         int(np.sign(round(xs[-1] - xs[0], 9))), speed, len(c)))
-    out.sort(key=lambda fr: fr.t_start)
+    t = iface["t"]
+    broken = iface["intact"] == 0
+    out: list[_Chain] = []
+    for k in range(broken.shape[0]):
+        new = broken[k] & ~broken[k - 1] if k else broken[0]
+        for a, b in _runs(np.flatnonzero(new)):
+            best, side = None, 0
+            for c in out:
+                sd = c.extends(a, b)
+                if not sd:
+                    continue
+                tip = c.hi if sd > 0 else c.lo
+                alive = (k > 0 and broken[k - 1, tip]) or t[k] - t[c.last] <= max_gap
+                if alive and (best is None or c.last > best.last):
+                    best, side = c, sd
+            if best is None:
+                out.append(_Chain(a, b, k))
+            else:
+                best.grow(side, a, b, k)
     return out
 
 
+def _fit_speed(xs: np.ndarray, ts: np.ndarray, d: int, dt_frame: float) -> float:
+    """Signed speed d / max(d * dt_arr/dx, dt_frame / span) from arrival times ``ts`` at sites ``xs``.
+
+    The arrival times carry the frame quantisation while x is exact, so t is
+    regressed on x.  Sites the tip crossed within one frame only bound the
+    speed: it is capped at their span per frame.  NaN for a single site.
+    """
+    span = float(np.ptp(xs))
+    if span == 0:
+        return math.nan
+    slope = float(np.polyfit(xs, ts, 1)[0])
+    return d / max(d * slope, dt_frame / span)
+
+
+def _local_speed(tt: np.ndarray, xx: np.ndarray, d: int, dt_frame: float, h: int) -> np.ndarray:
+    """Local tip speed at each site j: ``_fit_speed`` over sites j-h..j+h (the neighbours at a lone site)."""
+    n = len(xx)
+    v = np.empty(n)
+    for j in range(n):
+        lo, hi = max(0, j - h), min(n, j + h + 1)
+        if hi - lo < 2:
+            lo, hi = max(0, j - 1), min(n, j + 2)
+        v[j] = _fit_speed(xx[lo:hi], tt[lo:hi], d, dt_frame)
+    return v
+
+
+def _front(c: _Chain, iface: dict, h: int, windows: dict) -> Front:
+    t, x, intact = iface["t"], iface["x"], iface["intact"]
+    nf, ns = intact.shape
+    d = c.d
+    order = sorted(c.arrival, reverse=(d < 0))
+    s = np.array(order)
+    k = np.array([c.arrival[i] for i in order])
+    tt, xx = t[k], x[s]
+    dt_frame = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    n = len(s)
+
+    if d != 0:
+        v = _local_speed(tt, xx, d, dt_frame, h)
+        span_t = tt[-1] - tt[0]
+        mean = (xx[-1] - xx[0]) / span_t if span_t > 0 else d * abs(xx[-1] - xx[0]) / dt_frame
+        lo, hi = int(0.2 * n), max(int(0.8 * n), int(0.2 * n) + 2)
+        steady = abs(_fit_speed(xx[lo:hi], tt[lo:hi], d, dt_frame))
+        early = float(np.median(np.abs(v[: max(1, n // 2)])))
+        fast = np.flatnonzero(np.abs(v) > ACCEL_FACTOR * early)
+        accel = float(xx[fast[0]]) if len(fast) else None
+        vmax = float(v[int(np.nanargmax(np.abs(v)))])
+    else:
+        v = np.full(n, np.nan)
+        mean = vmax = steady = math.nan
+        accel = None
+
+    # Width: contiguous broken sites from the current tip back toward the nucleation side.
+    w = np.empty(n)
+    last_of_frame = {kk: j for j, kk in enumerate(k)}      # the tip at frame kk is the last site reached by then
+    step = -1 if d >= 0 else 1
+    for j in range(n):
+        kk = k[j]
+        site = s[last_of_frame[kk]]
+        cnt = 0
+        while 0 <= site < ns and intact[kk, site] == 0:
+            cnt += 1
+            site += step
+        w[j] = cnt
+    # Kind: a pulse if some bond behind the tip had re-attached when the tip made its last advance.
+    kind = "pulse" if n > 1 and w[-1] < n else "crack"
+
+    du, dv, ub, vb = (np.full(n, np.nan) for _ in range(4))
+    if "ux" in iface and "uy" in iface:
+        ux, uy = iface["ux"], iface["uy"]
+        for j in range(n):
+            kk, site = k[j], s[j]
+            k_lo, k_hi = windows[site][kk]
+            du[j] = ux[k_hi, site] - ux[k_lo, site]
+            dv[j] = uy[k_hi, site] - uy[k_lo, site]
+            behind = s[j - 1] if j else site
+            ub[j] = ux[kk, behind] - ux[0, behind]
+            vb[j] = uy[kk, behind] - uy[0, behind]
+
+    def med(a):
+        a = a[np.isfinite(a)]
+        return float(np.median(a)) if len(a) else math.nan
+
+    tip = {"t": tt.astype(float), "x": xx.astype(float), "v": v, "w": w, "du": du, "dv": dv,
+           "u_behind": ub, "v_behind": vb}
+    return Front(float(tt[0]), float(xx[0]), int(d), kind, float(mean), vmax, float(steady), accel,
+                 med(w), med(du), med(dv), tip)
+
+
+def _slip_windows(kept: list[_Chain], nf: int) -> dict:
+    """site -> {arrival frame: (k_lo, k_hi)}: the frames that bracket each front's passage of a site.
+
+    The slip a front carries at a site is the displacement between the
+    midpoints (in frames) to the neighbouring fronts' arrivals there: frame 0
+    before the first front, the last frame after the last.  The fronts so
+    share out all the motion of a site, creep included (which the paper finds
+    absent between pulses), and their slips add up to its total displacement.
+    """
+    per_site: dict[int, list[int]] = {}
+    for c in kept:
+        for site, k in c.arrival.items():
+            per_site.setdefault(site, []).append(k)
+    out = {}
+    for site, ks in per_site.items():
+        ks = sorted(ks)
+        bounds = [0] + [(a + b) // 2 for a, b in zip(ks, ks[1:])] + [nf - 1]
+        out[site] = {k: (bounds[i], bounds[i + 1]) for i, k in enumerate(ks)}
+    return out
+
+
+def fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5, window: int = 2) -> list[Front]:
+    """Every rupture front that broke at least ``min_sites`` bonds, in order of nucleation.
+
+    ``max_gap`` (l/c_r): longest pause of a tip whose bond re-attached before it
+    advanced again; ``window``: the local speed is fitted over 2 * window + 1 sites.
+    """
+    kept = [c for c in chains(iface, max_gap) if len(c.arrival) >= min_sites]
+    windows = _slip_windows(kept, len(iface["t"]))
+    out = [_front(c, iface, window, windows) for c in kept]
+    out.sort(key=lambda f: (f.nucleation_time, f.nucleation_x))
+    return out
+
+
+def table(fr: list[Front]) -> str:
+    """The catalogue as a readable table (units in the header)."""
+    head = (f"{'#':>3} {'t_nuc':>8} {'x_nuc':>6} {'dir':>4} {'kind':>6} {'v_mean':>9} {'v_max':>9} "
+            f"{'accel_x':>7} {'width':>6} {'slip_u':>9} {'slip_v':>9} {'sites':>5}\n"
+            f"{'':>3} {'l/c_r':>8} {'l':>6} {'':>4} {'':>6} {'c_r':>9} {'c_r':>9} "
+            f"{'l':>7} {'a':>6} {'l':>9} {'l':>9} {'':>5}")
+    rows = [head]
+    for i, f in enumerate(fr):
+        acc = f"{f.accel_x:7.3f}" if f.accel_x is not None else f"{'-':>7}"
+        rows.append(f"{i + 1:>3} {f.nucleation_time:8.3f} {f.nucleation_x:6.3f} {f.direction:>+4d} {f.kind:>6} "
+                    f"{f.mean_speed:9.3g} {f.max_speed:9.3g} {acc} {f.width:6.1f} {f.slip_u:9.3g} "
+                    f"{f.slip_v:9.3g} {f.sites:5d}")
+    return "\n".join(rows)
+
+
 def summary(iface: dict) -> str:
+    """First break and the front catalogue, as ``parslip run`` prints it."""
     tb, xb = first_break(iface)
     lines = []
     if tb is None:
@@ -99,10 +336,8 @@ def summary(iface: dict) -> str:
         lines.append(f"first break at t = {tb:.3f} l/c_r, x/l = {', '.join(f'{v:.3f}' for v in xb[:6])}")
     fr = fronts(iface)
     lines.append(f"{len(fr)} rupture fronts")
-    for i, f in enumerate(fr[:12]):
-        d = {1: "-> front (x=1)", -1: "-> rear (x=0)", 0: "(stationary)"}[f.direction]
-        lines.append(f"  #{i + 1}: nucleates t = {f.t_start:7.2f} at x/l = {f.x_start:.3f} {d}, "
-                     f"reaches x/l = {f.x_far:.3f} at t = {f.t_end:7.2f}, v/c_r = {f.speed:.3g}, {f.sites} sites")
+    if fr:
+        lines.append(table(fr[:12]))
     return "\n".join(lines)
 
 
@@ -111,19 +346,13 @@ def spacetime_png(iface: dict, png: str, title: str = "") -> bool:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
 
-    x, t, intact = iface["x"], iface["t"], iface["intact"]
-    if len(x) == 0:
+    from .figures import draw_spacetime
+
+    if len(iface["x"]) == 0:
         return False            # a free block has no interface to plot
     fig, ax = plt.subplots(figsize=(5, 6), dpi=150)
-    if len(t):
-        dx = (x[1] - x[0]) if len(x) > 1 else 1.0
-        ax.imshow(intact, origin="lower", aspect="auto", interpolation="nearest",
-                  cmap=ListedColormap(["white", "#f2c300"]), vmin=0, vmax=1,
-                  extent=[x[0] - dx / 2, x[-1] + dx / 2, t[0], t[-1]])
-    ax.set_xlabel("x / l")
-    ax.set_ylabel("t c_r / l")
+    draw_spacetime(ax, iface)
     ax.set_title(title or "interface bonds: intact (yellow), broken (white)", fontsize=9)
     fig.tight_layout()
     fig.savefig(png)

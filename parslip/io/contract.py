@@ -58,3 +58,60 @@ def read_interface(path: str) -> dict:
                 out[name] = g[name][:n] if per_frame or name == "time" else g[name][...]
         out["t"] = out["time"]
         return out
+
+
+# --- reader helpers for parslip.open and the analysis commands ----------------------------
+# Every read of a run file outside the writer goes through these, so a file that
+# is missing, not HDF5 or not a parslip run gives one ConfigError line (exit 2).
+
+VTKHDF = "VTKHDF"
+
+
+def check_run_file(path: str, what: str = "RUN") -> None:
+    """Raise ``ConfigError`` (one line: argument, value, what is accepted) unless ``path`` is a parslip run file."""
+    import os
+
+    import h5py
+
+    from ..errors import ConfigError
+
+    accepted = "a parslip run file (.vtkhdf written by `parslip run`)"
+    if not os.path.exists(path):
+        raise ConfigError(f"{what} {path!r}: no such file; accepted: {accepted}")
+    if os.path.isdir(path):
+        raise ConfigError(f"{what} {path!r}: is a directory; accepted: {accepted}")
+    try:
+        with h5py.File(path, "r") as f:
+            ok = INTERFACE in f and "time" in f[INTERFACE] and "intact" in f[INTERFACE]
+    except OSError:
+        raise ConfigError(f"{what} {path!r}: not an HDF5 file; accepted: {accepted}") from None
+    if not ok:
+        raise ConfigError(f"{what} {path!r}: HDF5 without /{INTERFACE}/time and /{INTERFACE}/intact; "
+                          f"accepted: {accepted}")
+
+
+def read_attrs(path: str) -> dict:
+    """Root attributes (resolved scene TOML, provenance, derived constants) as plain Python values."""
+    import h5py
+
+    def plain(v):
+        if isinstance(v, bytes):
+            return v.decode()
+        if isinstance(v, np.generic):
+            return v.item()
+        if isinstance(v, np.ndarray):
+            return v.tolist()
+        return v
+
+    with h5py.File(path, "r") as f:
+        return {k: plain(v) for k, v in f.attrs.items()}
+
+
+def read_snapshot_times(path: str) -> np.ndarray:
+    """Times of the VTKHDF snapshots, in l/c_r (empty when the run wrote none)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        if VTKHDF not in f or "Steps" not in f[VTKHDF]:
+            return np.zeros(0)
+        return np.asarray(f[VTKHDF]["Steps"]["Values"][...], dtype=float)

@@ -1,0 +1,294 @@
+"""The accuracy study: how much each fidelity knob changes the observables, and what it costs.
+
+Responsible for (1) ``metrics``, the errors of one run against a reference
+run: first-break time and site, nucleation interval, mean speed of the first
+three fronts, slip per front, and the fraction of the space-time map of
+intact bonds that disagrees on a common grid; (2) KNOBS, the data-driven list
+of fidelity knobs, each a reference (its finest setting) and variants, every
+setting a set of scene overrides computed from the base scene; (3) ``study``,
+which runs every needed setting through ``parslip run`` subprocesses, times
+each one's wall clock, and reports a knob whose key the scene refuses
+("unknown key", exit 2) as unavailable instead of failing; (4) the CSV and
+Markdown tables and the Pareto plot of error against run time.
+
+Units: times in l/c_r, sites in l, speeds in c_r, slip in l; relative
+errors are |test - ref| / |ref|; wall time in seconds.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .fronts import first_break
+
+log = logging.getLogger("parslip")
+
+N_FRONTS = 3            # the speed and slip errors average over the first three fronts
+
+
+# --- metrics ------------------------------------------------------------------------
+
+def _rel(a: float, b: float) -> float:
+    return abs(a - b) / abs(b) if b else (0.0 if a == b else math.inf)
+
+
+def spacetime_disagreement(test, ref) -> float:
+    """Fraction of the reference's (frame, site) grid where the test run's bond state differs.
+
+    The test record is resampled onto the reference's frame times (nearest
+    frame) and sites (nearest x), over the times both runs cover.
+    """
+    tr, tt = ref.times, test.times
+    keep = tr <= min(tr[-1], tt[-1]) + 1e-12
+    k = np.clip(np.searchsorted(tt, tr[keep]), 1, len(tt) - 1)
+    k -= (tr[keep] - tt[k - 1]) < (tt[k] - tr[keep])            # the nearer of the two neighbours
+    s = np.abs(test.x[None, :] - ref.x[:, None]).argmin(axis=1)
+    a = ref.interface["intact"][keep] == 1
+    b = test.interface["intact"][k][:, s] == 1
+    return float(np.mean(a != b)) if a.size else math.nan
+
+
+def metrics(test, ref) -> dict:
+    """Errors of run ``test`` against run ``ref`` (both ``parslip.open`` results).
+
+    first_break_t   |t_test - t_ref| of the first broken bond, l/c_r
+    first_break_x   |x_test - x_ref| of its site (mean over a frame's sites), l
+    interval        relative error of the mean time between nucleations at the driven edge
+    speed           mean over the first three fronts of the relative error of their mean speed
+    slip            mean over the first three fronts of the relative error of their slip_u
+    spacetime       fraction of the intact-bond map that disagrees (``spacetime_disagreement``)
+    Missing quantities (no break, too few fronts) are NaN.
+    """
+    from .paper import interval
+    tb_t, xb_t = first_break(test.interface)
+    tb_r, xb_r = first_break(ref.interface)
+    out = {"first_break_t": math.nan, "first_break_x": math.nan}
+    if tb_t is not None and tb_r is not None:
+        out["first_break_t"] = abs(tb_t - tb_r)
+        out["first_break_x"] = abs(float(np.mean(xb_t)) - float(np.mean(xb_r)))
+    out["interval"] = _rel(interval(test), interval(ref)) if math.isfinite(interval(ref)) else math.nan
+    ft, fr = test.fronts()[:N_FRONTS], ref.fronts()[:N_FRONTS]
+    n = min(len(ft), len(fr))
+    out["speed"] = float(np.mean([_rel(ft[i].mean_speed, fr[i].mean_speed) for i in range(n)])) if n else math.nan
+    out["slip"] = float(np.mean([_rel(ft[i].slip_u, fr[i].slip_u) for i in range(n)])) if n else math.nan
+    out["spacetime"] = spacetime_disagreement(test, ref)
+    return out
+
+
+METRICS = ("first_break_t", "first_break_x", "interval", "speed", "slip", "spacetime")
+
+
+# --- knobs --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Setting:
+    label: str
+    sets: Callable[[dict], dict]        # base scene -> overrides
+
+
+@dataclass(frozen=True)
+class Knob:
+    name: str
+    what: str
+    reference: Setting                  # the finest setting
+    variants: tuple[Setting, ...]
+
+
+def _s(label: str, **sets) -> Setting:
+    """A fixed setting; keyword names spell the scene key with __ for the dot (time__safety)."""
+    return Setting(label, lambda scene, ov=sets: {k.replace("__", "."): v for k, v in ov.items()})
+
+
+def _size(label: str, cols: int, rows: int) -> Setting:
+    """Substrate of cols x top_cols nodes and rows x top_rows rows (the paper's 300 x 20 is 3 x 2)."""
+    return Setting(label, lambda s: {"lattice.bottom_cols": cols * s["lattice.top_cols"],
+                                     "lattice.bottom_rows": rows * s["lattice.top_rows"]})
+
+
+def _cadence(label: str, spacings: float) -> Setting:
+    """Interface frames every ``spacings`` a/c_r, i.e. spacings / top_cols l/c_r."""
+    return Setting(label, lambda s: {"output.interface_dt": spacings / s["lattice.top_cols"]})
+
+
+KNOBS: tuple[Knob, ...] = (
+    Knob("time_step", "time.safety: dt as a fraction of the stability limit 2/omega_max",
+         _s("safety 0.1", time__safety=0.1),
+         (_s("safety 0.9", time__safety=0.9), _s("safety 0.5", time__safety=0.5),
+          _s("safety 0.25", time__safety=0.25))),
+    Knob("precision", "time.precision: floating-point precision of the state",
+         _s("float64", time__precision="float64"), (_s("float32", time__precision="float32"),)),
+    Knob("substrate_size", "lattice.bottom_cols x bottom_rows (l = top_cols)",
+         _size("5 l x 4 top_rows", 5, 4), (_size("2 l x 2 top_rows", 2, 2), _size("3 l x 2 top_rows", 3, 2))),
+    Knob("substrate_model", "material.bottom_kn, lattice.substrate (reference: the paper's k_n = 100)",
+         _s("k_n 100", material__bottom_kn=100.0),
+         (_s("k_n 1e3", material__bottom_kn=1e3), _s("k_n 1e4", material__bottom_kn=1e4),
+          _s("rigid", lattice__substrate="rigid"))),
+    Knob("cadence", "output.interface_dt in a/c_r (a front at c_r crosses one spacing per a/c_r)",
+         _cadence("0.25 a/c_r", 0.25), (_cadence("1 a/c_r", 1.0), _cadence("2 a/c_r", 2.0), _cadence("5 a/c_r", 5.0))),
+)
+
+# Drive long enough for the first three nucleations and the fronts' first stretch (l/c_r), by drive mode.
+DURATION = {"push": 32.0, "pull": 32.0, "shear": 72.0}
+
+
+# --- running ------------------------------------------------------------------------
+
+@dataclass
+class RunResult:
+    path: str
+    code: int                   # exit code of `parslip run`
+    wall: float                 # s, the subprocess's wall clock
+    error: str = ""             # last line of stderr when it failed
+    solver: float = math.nan    # s, the time stepping alone, from the run's "done in ... s" log line
+
+    @property
+    def unavailable(self) -> bool:
+        return self.code == 2 and "unknown key" in self.error
+
+
+def run_setting(scene: str, out: str, sets: dict, base_sets=()) -> RunResult:
+    """``parslip run scene`` with ``--set`` overrides in a subprocess, timed by wall clock."""
+    cmd = [sys.executable, "-m", "parslip", "run", scene, "--out", out, "--overwrite", "--quiet", "--no-png"]
+    for s in base_sets:
+        cmd += ["--set", s]
+    for k, v in sets.items():
+        cmd += ["--set", f"{k}={_toml(v)}"]
+    t0 = time.monotonic()
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.monotonic() - t0
+    err = p.stderr.strip().splitlines()[-1] if p.returncode and p.stderr.strip() else ""
+    m = re.search(r"done in ([0-9.]+) s", p.stderr)
+    return RunResult(out, p.returncode, wall, err, float(m.group(1)) if m else math.nan)
+
+
+def _toml(v) -> str:
+    return f'"{v}"' if isinstance(v, str) else repr(v)
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9.]+", "_", text).strip("_")
+
+
+def study(scene: str, out_dir: str, knobs=None, quick: bool = False, duration: float | None = None,
+          sets=()) -> list[dict]:
+    """Run each knob's reference and variants and measure each variant against its reference.
+
+    ``knobs``: names to include (default all); ``quick``: only the first
+    variant of each knob; ``duration``: drive time in l/c_r (default by
+    drive mode, DURATION); ``sets``: further ``key=value`` overrides for every
+    run.  Snapshots are off.  Returns one row per setting (the reference
+    with zero error) with its wall time and the errors of ``metrics``, or a
+    status of ``unavailable`` / ``failed: ...``.
+    """
+    from ..scene.load import load_scene_file, parse_set, resolve
+    from .results import open as open_run
+
+    base = resolve(load_scene_file(scene), [parse_set(s) for s in sets])
+    dur = duration or DURATION.get(base["drive.mode"], base["drive.duration"])
+    base_sets = list(sets) + [f"drive.duration={dur!r}", "output.snapshots=0"]
+    os.makedirs(out_dir, exist_ok=True)
+    done: dict[tuple, RunResult] = {}
+
+    def run(label: str, over: dict) -> RunResult:
+        key = tuple(sorted(over.items()))
+        if key not in done:
+            path = os.path.join(out_dir, _slug(label) + ".vtkhdf")
+            log.info(f"running {label}: {' '.join(f'{k}={v}' for k, v in over.items())}")
+            done[key] = run_setting(scene, path, over, base_sets)
+        return done[key]
+
+    rows = []
+    for knob in KNOBS:
+        if knobs and knob.name not in knobs:
+            continue
+        variants = knob.variants[:1] if quick else knob.variants
+        ref = run(f"{knob.name} {knob.reference.label}", knob.reference.sets(base))
+        if ref.unavailable:             # the engine does not know this knob's key: no point running variants
+            variants = ()
+        ref_run = open_run(ref.path) if ref.code == 0 else None
+        for setting, is_ref in [(knob.reference, True)] + [(v, False) for v in variants]:
+            res = ref if is_ref else run(f"{knob.name} {setting.label}", setting.sets(base))
+            row = {"knob": knob.name, "setting": setting.label, "reference": is_ref, "wall_s": res.wall,
+                   "solver_s": res.solver, "status": "ok"}
+            if res.unavailable or (ref.unavailable and not is_ref):
+                row["status"] = "unavailable (key refused)"
+            elif res.code != 0 or ref_run is None:
+                row["status"] = f"failed: {(res.error or ref.error)[:120]}"
+            else:
+                row.update(metrics(open_run(res.path), ref_run))
+            rows.append(row)
+            if row["status"] != "ok":
+                log.info(f"{knob.name} {setting.label}: {row['status']}")
+    return rows
+
+
+# --- reports ------------------------------------------------------------------------
+
+COLUMNS = ("knob", "setting", "reference", "status", "wall_s", "solver_s") + METRICS
+UNITS = {"wall_s": "s", "solver_s": "s", "first_break_t": "l/c_r", "first_break_x": "l", "interval": "rel", "speed": "rel",
+         "slip": "rel", "spacetime": "fraction"}
+
+
+def _cell(v) -> str:
+    if isinstance(v, float):
+        return "" if not math.isfinite(v) else f"{v:.4g}"
+    return str(v)
+
+
+def to_csv(rows: list[dict]) -> str:
+    head = ",".join(f"{c}_{UNITS[c]}" if c in UNITS and not c.endswith("_s") else c for c in COLUMNS)
+    return head + "\n" + "".join(",".join(_cell(r.get(c, "")).replace(",", ";") for c in COLUMNS) + "\n"
+                                 for r in rows)
+
+
+def to_markdown(rows: list[dict]) -> str:
+    head = [f"{c} ({UNITS[c]})" if c in UNITS else c for c in COLUMNS]
+    out = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(COLUMNS)]
+    for r in rows:
+        out.append("| " + " | ".join(_cell(r.get(c, "")) for c in COLUMNS) + " |")
+    return "\n".join(out) + "\n"
+
+
+PARETO = ("speed", "spacetime", "first_break_t")
+
+
+def pareto_png(rows: list[dict], out_dir: str) -> list[str]:
+    """Error against wall time, one panel per metric in PARETO, one colour per knob (log-log)."""
+    from .figures import _legend, _plt, save
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(PARETO), figsize=(4.5 * len(PARETO), 3.8))
+    knobs = sorted({r["knob"] for r in rows})
+    for ax, m in zip(axes, PARETO):
+        for i, kn in enumerate(knobs):
+            pts = [(r["wall_s"], r[m], r["setting"]) for r in rows
+                   if r["knob"] == kn and r["status"] == "ok" and not r["reference"] and math.isfinite(r.get(m, math.nan))]
+            if not pts:
+                continue
+            ax.scatter([p[0] for p in pts], [max(p[1], 1e-6) for p in pts], color=f"C{i}", label=kn, s=18)
+            for w, e, lab in pts:
+                ax.annotate(lab, (w, max(e, 1e-6)), fontsize=6)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time / s")
+        ax.set_ylabel(f"{m} error ({UNITS[m]}; 0 drawn at 1e-6)")
+        _legend(ax, 6)
+    return save(fig, out_dir, "accuracy_pareto")
+
+
+def write_reports(rows: list[dict], out_dir: str) -> list[str]:
+    """accuracy.csv, accuracy.md and the Pareto plot in ``out_dir``."""
+    paths = [os.path.join(out_dir, "accuracy.csv"), os.path.join(out_dir, "accuracy.md")]
+    with open(paths[0], "w") as fh:
+        fh.write(to_csv(rows))
+    with open(paths[1], "w") as fh:
+        fh.write(to_markdown(rows))
+    return paths + pareto_png(rows, out_dir)

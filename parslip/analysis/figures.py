@@ -1,0 +1,425 @@
+"""The paper's figure set for one run (Sec. 3 and the appendices), with matplotlib (Agg).
+
+Responsible for drawing the figures from a ``parslip.open`` result and for
+the two small computations only they need: the interface-stress profile
+ahead of a tip and the Mode II square-root fit (appendix B).  Every figure is
+written as PNG and PDF; ``write_all`` writes the whole set for one run and
+``compare_speeds`` overlays front speeds of several runs (Fig. 2d, appendix D).
+
+Units as in the output: x, x_tip and displacements in l, t in l/c_r, speeds
+in c_r, interface stresses in rho c_r^2, pulse width in lattice spacings a.
+The colours of the first four fronts are the paper's: blue, orange, green, brown.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import math
+import os
+
+import numpy as np
+
+log = logging.getLogger("parslip")
+
+YELLOW = "#f2c300"
+FRONT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:brown")
+SLIP_POINTS = (0.0, 0.35, 0.98)           # x/l of the slip records (Fig. 10, appendix C)
+
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def save(fig, out_dir: str, name: str) -> list[str]:
+    """Write ``name``.png and ``name``.pdf in ``out_dir``; close the figure; return both paths."""
+    plt = _plt()
+    os.makedirs(out_dir, exist_ok=True)
+    paths = [os.path.join(out_dir, f"{name}.{ext}") for ext in ("png", "pdf")]
+    fig.tight_layout()
+    for p in paths:
+        fig.savefig(p, dpi=150)
+    plt.close(fig)
+    return paths
+
+
+def colour(i: int) -> str:
+    return FRONT_COLOURS[i] if i < len(FRONT_COLOURS) else "0.5"
+
+
+def _title(run) -> str:
+    return f"{os.path.basename(run.path)}: {run.mode}, v0/c_r = {run.v0:g}"
+
+
+def _legend(ax, size: int) -> None:
+    """A legend when something is labelled (a run without fronts has nothing to list)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=size)
+
+
+def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, legend: bool = True) -> list[str]:
+    """Label a column of axes (x label on the last), legend and run title on the first, then save."""
+    axes = list(np.atleast_1d(axes))
+    for ax, yl in zip(axes, ylabels):
+        ax.set_ylabel(yl)
+    axes[-1].set_xlabel(xlabel)
+    if legend:
+        _legend(axes[0], 7)
+    axes[0].set_title(_title(run), fontsize=8)
+    return save(fig, out_dir, name)
+
+
+# --- space-time and speeds ------------------------------------------------------
+
+def draw_spacetime(ax, iface: dict) -> None:
+    """Intact bonds yellow, broken white, x/l across and t c_r/l upward (Figs. 2b, 4b, 6b)."""
+    from matplotlib.colors import ListedColormap
+    x, t, intact = iface["x"], iface["t"], iface["intact"]
+    if len(t):
+        dx = (x[1] - x[0]) if len(x) > 1 else 1.0
+        dt = (t[1] - t[0]) if len(t) > 1 else 1.0
+        ax.imshow(intact, origin="lower", aspect="auto", interpolation="nearest",
+                  cmap=ListedColormap(["white", YELLOW]), vmin=0, vmax=1,
+                  extent=[x[0] - dx / 2, x[-1] + dx / 2, t[0] - dt / 2, t[-1] + dt / 2])
+    ax.set_xlabel("x / l")
+    ax.set_ylabel("t c_r / l")
+
+
+def fig_spacetime(run, out_dir: str) -> list[str]:
+    """Space-time diagram with each detected front's tip drawn over it and a red arrow for its direction."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(5, 6))
+    draw_spacetime(ax, run.interface)
+    for i, f in enumerate(run.fronts()):
+        ax.plot(f.tip["x"], f.tip["t"], color=colour(i), lw=1.2)
+        if f.direction:
+            j = len(f.tip["x"]) // 2
+            j1 = min(j + max(2, len(f.tip["x"]) // 8), len(f.tip["x"]) - 1)
+            ax.annotate("", xy=(f.tip["x"][j1], f.tip["t"][j1]), xytext=(f.tip["x"][j], f.tip["t"][j]),
+                        arrowprops=dict(arrowstyle="->", color="red", lw=1.5))
+    ax.set_title(_title(run) + "\nintact yellow, broken white; detected tips", fontsize=8)
+    return save(fig, out_dir, "spacetime")
+
+
+def fig_front_speed(run, out_dir: str, n: int = 4) -> list[str]:
+    """Local tip speed v/c_r (signed) against x_tip/l for the first ``n`` fronts (Figs. 2c, 4c, 6c)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for i, f in enumerate(run.fronts()[:n]):
+        ax.plot(f.tip["x"], f.tip["v"], color=colour(i), label=f"{i + 1}: {f.kind}, mean {f.mean_speed:.3g}")
+    ax.set_xlim(0, 1)
+    return _finish(fig, ax, run, out_dir, "front_speed", "x_tip / l", ("v / c_r",))
+
+
+# --- interface stresses ---------------------------------------------------------
+
+def leading_tip(fronts: list, t: float):
+    """(front, x_tip) of the leading front at time ``t``: the earliest-nucleated one alive then."""
+    alive = [f for f in fronts if f.nucleation_time <= t <= f.tip["t"][-1] + 1e-12]
+    if not alive:
+        return None, math.nan
+    f = min(alive, key=lambda fr: fr.nucleation_time)
+    return f, f.tip_at(t)
+
+
+def stress_times(run, n: int = 4) -> list[float]:
+    """Times for the interface-stress profiles: the first ``n`` nucleations when the run has a train of
+    fronts (Figs. 3b, 5b); ``n`` moments along the first front's run when it has one (Fig. 7b)."""
+    fr = run.fronts()
+    if not fr:
+        return []
+    if len(fr) == 1:
+        tt = fr[0].tip["t"]
+        return [float(tt[int(round(q * (len(tt) - 1)))]) for q in np.linspace(0, 1, n)]
+    return [f.nucleation_time for f in fr[:n]]
+
+
+def fig_interface_stress(run, out_dir: str, times: list[float] | None = None) -> list[str]:
+    """sigma_xy and sigma_yy along the interface against x - x_tip^1 (the leading tip) at ``times``
+    (Figs. 3b-c, 5b-c, 7b-c); dashed lines mark the other fronts' tips at the first of them."""
+    plt = _plt()
+    it, fr = run.interface, run.fronts()
+    times = stress_times(run) if times is None else times
+    fig, axes = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+    for i, t in enumerate(times):
+        k = run.frame_at(t)
+        _, x1 = leading_tip(fr, run.times[k])
+        if not math.isfinite(x1):
+            x1 = 0.0
+        for ax, name in zip(axes, ("sxy", "syy")):
+            ax.plot(run.x - x1, it[name][k], color=colour(i), lw=1, label=f"t c_r/l = {run.times[k]:.1f}")
+            for f in fr:
+                if f.nucleation_time <= run.times[k] <= f.tip["t"][-1]:
+                    ax.axvline(f.tip_at(run.times[k]) - x1, color=colour(i), ls="--", lw=0.6)
+    return _finish(fig, axes, run, out_dir, "interface_stress", "(x - x_tip^1) / l",
+                   ("sigma_xy / rho c_r^2", "sigma_yy / rho c_r^2"))
+
+
+def tip_profile(run, front, t: float, field: str = "sxy", sites: int = 8):
+    """(xi, sigma) ahead of ``front``'s tip at the frame nearest ``t``: xi = direction * (x - x_tip) > 0,
+    in l, over at most ``sites`` sites, stopping at the contact's edge; sigma in rho c_r^2."""
+    k = run.frame_at(t)
+    x_tip = front.tip_at(run.times[k])
+    xi = front.direction * (run.x - x_tip)
+    ahead = np.flatnonzero(xi > 1e-12)
+    ahead = ahead[np.argsort(xi[ahead])][:sites]
+    return xi[ahead], run.interface[field][k, ahead]
+
+
+def mode2_fit(xi: np.ndarray, sigma: np.ndarray) -> tuple[float, float]:
+    """K_II and x_p of sigma = K_II / sqrt(2 pi (xi + x_p)) (appendix B), xi > 0 the distance ahead of the tip.
+
+    The model is linear in xi after a change of variable,
+        sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2,
+    so a straight-line least-squares fit of sigma^-2 on xi gives slope A and
+    intercept B, K_II = sign(sigma) sqrt(2 pi / A), x_p = B / A.  Units: xi and
+    x_p in l, sigma in rho c_r^2, K_II in rho c_r^2 l^(1/2).  Returns (nan, nan)
+    when the profile does not fall off ahead of the tip (A <= 0).
+    """
+    xi, sigma = np.asarray(xi, float), np.asarray(sigma, float)
+    if len(xi) < 2 or np.any(sigma == 0):
+        return math.nan, math.nan
+    sign = float(np.sign(sigma[np.argmin(xi)]))
+    keep = np.sign(sigma) == sign
+    if keep.sum() < 2:
+        return math.nan, math.nan
+    a, b = np.polyfit(xi[keep], 1.0 / sigma[keep] ** 2, 1)
+    if a <= 0:
+        return math.nan, math.nan
+    return sign * math.sqrt(2 * math.pi / a), b / a
+
+
+def mode2_table(run, n_fronts: int = 3) -> list[dict]:
+    """Mode II fits of the first ``n_fronts`` fronts at the stress-figure times they are alive at
+    (their own midpoint if none): rows of front, t, K_II, x_p, sigma_max."""
+    rows = []
+    fr = run.fronts()
+    for i, f in enumerate(fr[:n_fronts]):
+        ts = [t for t in stress_times(run) if f.nucleation_time < t <= f.tip["t"][-1]]
+        if not ts:
+            ts = [float(f.tip["t"][len(f.tip["t"]) // 2])]
+        for t in ts:
+            xi, s = tip_profile(run, f, t)
+            k2, xp = mode2_fit(xi, s)
+            rows.append({"front": i + 1, "t": float(run.times[run.frame_at(t)]), "K_II": k2, "x_p": xp,
+                         "sigma_max": float(s[0]) if len(s) else math.nan})
+    return rows
+
+
+def fig_mode2(run, out_dir: str, n_fronts: int = 3) -> tuple[list[str], list[dict]]:
+    """sigma_xy ahead of the tip with the fitted K_II / sqrt(2 pi (xi + x_p)) dashed (appendix B)."""
+    plt = _plt()
+    rows = mode2_table(run, n_fronts)
+    fr = run.fronts()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for r in rows:
+        f = fr[r["front"] - 1]
+        xi, s = tip_profile(run, f, r["t"])
+        c = colour(r["front"] - 1)
+        ax.plot(xi, s, "o-", color=c, ms=3, lw=1, label=f"front {r['front']}, t c_r/l = {r['t']:.1f}: "
+                f"K_II = {r['K_II']:.3g}, x_p = {r['x_p']:.3g}")
+        if math.isfinite(r["K_II"]):
+            xx = np.linspace(max(0.0, -r["x_p"]) + 1e-3 * xi.max(), xi.max(), 100)
+            ax.plot(xx, r["K_II"] / np.sqrt(2 * np.pi * (xx + r["x_p"])), "--", color=c, lw=1)
+    ax.set_xlabel("distance ahead of the tip / l")
+    ax.set_ylabel("sigma_xy / rho c_r^2")
+    _legend(ax, 6)
+    ax.set_title(_title(run) + "\nK_II in rho c_r^2 l^1/2, x_p in l", fontsize=8)
+    paths = save(fig, out_dir, "mode2_fit")
+    csv = os.path.join(out_dir, "mode2_fit.csv")
+    with open(csv, "w") as fh:
+        fh.write("front,t_l_per_cr,K_II_rho_cr2_sqrt_l,x_p_l,sigma_max_rho_cr2\n")
+        for r in rows:
+            fh.write(f"{r['front']},{r['t']:.6g},{r['K_II']:.6g},{r['x_p']:.6g},{r['sigma_max']:.6g}\n")
+    return paths + [csv], rows
+
+
+# --- slip -----------------------------------------------------------------------
+
+def site_index(run, x: float) -> int:
+    """The interface site nearest x (l)."""
+    return int(np.argmin(np.abs(run.x - x)))
+
+
+def passages(run, s: int) -> list[tuple[int, float]]:
+    """(front index, time) at which each front's tip reached site ``s``."""
+    out = []
+    for i, f in enumerate(run.fronts()):
+        hit = np.flatnonzero(np.isclose(f.tip["x"], run.x[s]))
+        if len(hit):
+            out.append((i, float(f.tip["t"][hit[0]])))
+    return out
+
+
+def fig_slip_records(run, out_dir: str, points=SLIP_POINTS) -> list[str]:
+    """u(t) at three interface points, with a marker where each front passes (Fig. 10)."""
+    plt = _plt()
+    ux = run.interface["ux"]
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for x, ls in zip(points, ("-", "--", ":")):
+        s = site_index(run, x)
+        ax.plot(run.times, ux[:, s], "k", ls=ls, lw=1, label=f"x/l = {run.x[s]:.2f}")
+        for i, t in passages(run, s):
+            ax.plot(t, ux[run.frame_at(t), s], "o", color=colour(i), ms=4)
+    return _finish(fig, ax, run, out_dir, "slip_records", "t c_r / l", ("u / l",))
+
+
+def slip_behind_tips(run, front_index: int):
+    """(x_tip, du, dv) behind the tip of front ``front_index`` as in Sec. 3.4, in l.
+
+    du: u of the site just behind the tip, from t = 0, minus the drive
+    displacement v0 t_nuc(i-1) up to the previous front's nucleation (0 for the
+    first front); dv: v of that site from t = 0 (the loaded equilibrium).
+    """
+    fr = run.fronts()
+    f = fr[front_index]
+    ref = run.v0 * fr[front_index - 1].nucleation_time if front_index > 0 else 0.0
+    return f.tip["x"], f.tip["u_behind"] - ref, f.tip["v_behind"]
+
+
+def fig_slip_behind_tips(run, out_dir: str, n: int = 4) -> list[str]:
+    """Delta u and Delta v behind the tips of the first ``n`` fronts against x_tip (Fig. 9)."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 1, figsize=(5, 5), sharex=True)
+    for i in range(min(n, len(run.fronts()))):
+        x, du, dv = slip_behind_tips(run, i)
+        axes[0].plot(x, du, color=colour(i), label=f"front {i + 1}")
+        axes[1].plot(x, dv, color=colour(i))
+    return _finish(fig, axes, run, out_dir, "slip_behind_tips", "x_tip / l", ("Delta u / l", "Delta v / l"))
+
+
+def slip_velocity(run, x: float) -> tuple[np.ndarray, np.ndarray]:
+    """(t, du/dt) at the site nearest x: central differences of u in l over t in l/c_r, so in c_r."""
+    s = site_index(run, x)
+    return run.times, np.gradient(run.interface["ux"][:, s], run.times)
+
+
+def fig_slip_velocity(run, out_dir: str, points=SLIP_POINTS) -> list[str]:
+    """The slip velocity u-dot at x/l = 0, 0.35 and 0.98 (appendix C)."""
+    plt = _plt()
+    fig, axes = plt.subplots(len(points), 1, figsize=(5, 6), sharex=True)
+    for ax, x in zip(axes, points):
+        t, v = slip_velocity(run, x)
+        ax.plot(t, v, color="tab:orange", lw=0.8)
+        ax.set_ylabel(f"u-dot / c_r\nx/l = {x:g}", fontsize=8)
+        ax.ticklabel_format(axis="y", useOffset=False)
+    return _finish(fig, axes, run, out_dir, "slip_velocity", "t c_r / l", (), legend=False)
+
+
+def fig_pulse_width(run, out_dir: str, n: int = 4) -> list[str]:
+    """Width of the broken zone behind the tip, in lattice spacings, against x_tip (appendix A)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for i, f in enumerate(run.fronts()[:n]):
+        ax.plot(f.tip["x"], f.tip["w"], color=colour(i), drawstyle="steps-mid", label=f"front {i + 1} ({f.kind})")
+    return _finish(fig, ax, run, out_dir, "pulse_width", "x_tip / l", ("width / a",))
+
+
+# --- stress maps (rendered by parslip.analysis.render when present) --------------
+
+def map_times(run) -> list[float]:
+    """Times of the stress maps (Figs. 3a, 5a, 7a, 8): the first front's nucleation, the fourth's (or
+    the last one's) and where the first accelerates (or ends); for a lone front, its start, middle and end."""
+    fr = run.fronts()
+    if not fr:
+        return [float(run.times[-1])] if len(run.times) else []
+    f = fr[0]
+    if len(fr) == 1:
+        tt = f.tip["t"]
+        return [float(tt[0]), float(tt[len(tt) // 2]), float(tt[-1])]
+    t_acc = f.tip["t"][np.flatnonzero(f.tip["x"] == f.accel_x)[0]] if f.accel_x is not None else f.tip["t"][-1]
+    return [f.nucleation_time, fr[min(3, len(fr) - 1)].nucleation_time, float(t_acc)]
+
+
+def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> list[str]:
+    """sigma_xy and sigma_xx over the lattice with the interface bonds in red, rendered off screen by
+    ``parslip.analysis.render.render_frame``; skipped with a logged note when that module is absent."""
+    try:
+        render = importlib.import_module("parslip.analysis.render")
+    except ImportError:
+        log.info("stress maps skipped: parslip.analysis.render is not installed in this checkout")
+        return []
+    if not len(run.snapshot_times):
+        log.info("stress maps skipped: the run holds no snapshots (output.snapshots = 0)")
+        return []
+    out = []
+    for field in fields:
+        for t in (map_times(run) if times is None else times):
+            t_snap = float(run.snapshot_times[np.argmin(np.abs(run.snapshot_times - t))])   # what gets drawn
+            png = os.path.join(out_dir, f"map_{field}_t{t_snap:07.2f}.png")
+            render.render_frame(run, field, t, png)
+            out.append(png)
+    return out
+
+
+FIGURES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "slip_records",
+           "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit")
+
+
+def write_all(run, out_dir: str, only=None) -> list[str]:
+    """Write the figure set of one run into ``out_dir``; ``only`` limits it to some of FIGURES."""
+    makers = {
+        "spacetime": fig_spacetime, "front_speed": fig_front_speed, "interface_stress": fig_interface_stress,
+        "stress_maps": fig_stress_maps, "slip_records": fig_slip_records,
+        "slip_behind_tips": fig_slip_behind_tips, "slip_velocity": fig_slip_velocity,
+        "pulse_width": fig_pulse_width, "mode2_fit": lambda r, d: fig_mode2(r, d)[0],
+    }
+    paths = []
+    for name in (only or FIGURES):
+        paths += makers[name](run, out_dir)
+    return paths
+
+
+# --- several runs ------------------------------------------------------------------
+
+def _clip_to_steady(ax, factor: float = 4.0) -> None:
+    """Limit the y axis to ``factor`` x the largest median |y| of the curves: the steady stretch, where
+    v/v0 curves should coincide, stays readable beside the final acceleration to c_r (which, divided by
+    a small v0, is thousands)."""
+    ys = [np.abs(line.get_ydata()) for line in ax.get_lines() if len(line.get_ydata())]
+    if ys:
+        m = factor * max(float(np.median(y)) for y in ys)
+        neg = any(np.median(line.get_ydata()) < 0 for line in ax.get_lines() if len(line.get_ydata()))
+        ax.set_ylim(-m if neg else 0.0, m if not neg else 0.0)
+
+
+def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", name: str = "compare_speed"):
+    """Front speed of the first ``n`` fronts of several runs, one panel per front.
+
+    scale ``v0``: v/v0 against x_tip/l (Fig. 2d, the v0 sweep, where v is proportional to v0);
+    the y axis is clipped to the steady stretch (``_clip_to_steady``);
+    ``c_r``: |v|/c_r against the distance from the nucleation site (appendix D, push against pull,
+    which run in opposite directions).  ``auto``: v0 when the runs' v0 differ.  Returns the paths
+    and rows of (run, mode, v0, front, mean speed in c_r, mean speed / v0).
+    """
+    plt = _plt()
+    if scale == "auto":
+        scale = "v0" if len({r.v0 for r in runs}) > 1 else "c_r"
+    fig, axes = plt.subplots(1, n, figsize=(4 * n, 3.5), squeeze=False)
+    styles = ("-", "--", ":", "-.")
+    rows = []
+    for j, run in enumerate(runs):
+        fr = run.fronts()
+        for i in range(n):
+            ax = axes[0, i]
+            if i >= len(fr):
+                continue
+            f = fr[i]
+            lab = f"{run.mode}, v0/c_r = {run.v0:g}: mean {f.mean_speed / (run.v0 if scale == 'v0' else 1):.3g}"
+            if scale == "v0":
+                ax.plot(f.tip["x"], f.tip["v"] / run.v0, color=colour(i), ls=styles[j % 4], label=lab)
+            else:
+                ax.plot(np.abs(f.tip["x"] - f.nucleation_x), np.abs(f.tip["v"]), ls=styles[j % 4], label=lab)
+            rows.append({"run": run.path, "mode": run.mode, "v0": run.v0, "front": i + 1,
+                         "mean_speed": f.mean_speed, "mean_speed_over_v0": f.mean_speed / run.v0})
+    for i in range(n):
+        ax = axes[0, i]
+        if scale == "v0":
+            _clip_to_steady(ax)
+        ax.set_title(f"front {i + 1}", fontsize=9)
+        ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
+        ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")
+        _legend(ax, 6)
+    return save(fig, out_dir, name), rows

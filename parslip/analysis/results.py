@@ -1,0 +1,165 @@
+"""A run file as a read-only Python object: ``parslip.open(path)``.
+
+Responsible for what a notebook, a script or the figure code reads from a run:
+the interface record with its units, the snapshots as pyvista meshes, the
+rupture fronts, the resolved scene and the provenance.  All file access goes
+through ``parslip.io.contract``; pyvista is imported only when a snapshot is
+asked for.
+
+    import parslip
+    run = parslip.open("out/push.vtkhdf")
+    run.interface["ux"]          # [frames, sites], in l
+    run.times                    # interface frame times, l/c_r
+    mesh = run.snapshot_at(30.0) # pyvista UnstructuredGrid nearest t = 30 l/c_r
+    [f.nucleation_time for f in run.fronts()]
+"""
+from __future__ import annotations
+
+import sys
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..io import contract
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+class Run:
+    """One run file, read lazily and cached; nothing here writes to it.
+
+    Units: x and displacements in l (the contact length), times in l/c_r,
+    speeds in c_r, interface tractions in rho c_r^2; snapshot positions in a,
+    snapshot stresses in rho c_r^2 (see ``units``).
+    """
+
+    def __init__(self, path: str):
+        contract.check_run_file(path)
+        self.path = str(path)
+        self._reader = None
+
+    @classmethod
+    def from_arrays(cls, interface: dict, scene: dict | None = None, attrs: dict | None = None) -> "Run":
+        """A result object over arrays already in memory (same keys and units as ``interface``), without
+        snapshots: for records built by hand or cut from another run."""
+        self = cls.__new__(cls)
+        self.path, self._reader = "<memory>", None
+        iface = dict(interface)
+        iface.setdefault("t", iface.get("time"))
+        iface.setdefault("time", iface["t"])
+        # cached_property reads the instance dict first: fill it instead of the file.
+        self.__dict__.update(interface=iface, scene=dict(scene or {}), attrs=dict(attrs or {}),
+                             snapshot_times=np.zeros(0))
+        return self
+
+    def __repr__(self) -> str:
+        s = self.scene
+        return (f"<parslip run {self.path!r}: {s.get('drive.mode')} v0/c_r = {s.get('drive.v0')}, "
+                f"{len(self.times)} frames x {len(self.x)} sites, {len(self.snapshot_times)} snapshots, "
+                f"status {self.attrs.get('status')!r}>")
+
+    # --- interface record ---------------------------------------------------
+    @cached_property
+    def interface(self) -> dict:
+        """The ``/interface`` datasets as numpy arrays (``contract.read_interface``); ``t`` aliases ``time``."""
+        return contract.read_interface(self.path)
+
+    @property
+    def units(self) -> dict:
+        """Units of each interface array, from the output contract."""
+        u = {name: spec[2] for name, spec in contract.INTERFACE_DATASETS.items()}
+        u["t"] = u["time"]
+        return u
+
+    @property
+    def times(self) -> np.ndarray:
+        """Interface frame times, l/c_r from the start of the drive."""
+        return self.interface["t"]
+
+    @property
+    def x(self) -> np.ndarray:
+        """Interface site positions, in l: 0 rear edge, 1 front edge."""
+        return self.interface["x"]
+
+    def frame_at(self, t: float) -> int:
+        """Index of the interface frame nearest time ``t`` (l/c_r)."""
+        return _nearest(self.times, t, "time")
+
+    # --- scene and provenance -----------------------------------------------
+    @cached_property
+    def attrs(self) -> dict:
+        """Root attributes: provenance (command, git commit, version, created_utc, status), dt, c_r, l, ..."""
+        return contract.read_attrs(self.path)
+
+    @cached_property
+    def scene(self) -> dict:
+        """The resolved scene as dotted keys -> values (``{"drive.mode": "push", ...}``)."""
+        from ..scene.load import _flatten
+        text = self.attrs.get("scene")
+        return _flatten(tomllib.loads(text)) if text else {}
+
+    @property
+    def mode(self) -> str:
+        return self.scene.get("drive.mode", "?")
+
+    @property
+    def v0(self) -> float:
+        """Drive velocity, in c_r."""
+        return float(self.scene.get("drive.v0", float("nan")))
+
+    # --- snapshots ----------------------------------------------------------
+    @cached_property
+    def snapshot_times(self) -> np.ndarray:
+        """Times of the whole-lattice snapshots, in l/c_r."""
+        return contract.read_snapshot_times(self.path)
+
+    def snapshot(self, k: int):
+        """Snapshot ``k`` (negative counts from the end) as a pyvista UnstructuredGrid.
+
+        Point fields: velocity (internal unit), sxx, syy, sxy (rho c_r^2); line
+        cells with cell fields ``interface`` and ``intact``; positions in a.
+        """
+        n = len(self.snapshot_times)
+        if not -n <= k < n:
+            raise ConfigError(f"snapshot {k}: out of range; accepted: -{n} <= k < {n} "
+                              f"({n} snapshots in {self.path})" if n else
+                              f"snapshot {k}: {self.path} holds no snapshots; accepted: a run with output.snapshots > 0")
+        r = self._pv_reader()
+        r.reader.SetStep(k % n)
+        return r.read()
+
+    def snapshot_at(self, t: float):
+        """The snapshot nearest time ``t`` (l/c_r) as a pyvista mesh."""
+        return self.snapshot(_nearest(self.snapshot_times, t, "snapshot time"))
+
+    def _pv_reader(self):
+        if self._reader is None:
+            import pyvista as pv
+            self._reader = pv.get_reader(self.path, force_ext=".vtkhdf")
+            self._reader.reader.UpdateInformation()
+        return self._reader
+
+    # --- fronts -------------------------------------------------------------
+    def fronts(self, **kw):
+        """The rupture-front catalogue (``analysis.fronts.fronts``), cached per keyword set."""
+        from .fronts import fronts
+        key = tuple(sorted(kw.items()))
+        cache = self.__dict__.setdefault("_fronts", {})
+        if key not in cache:
+            cache[key] = fronts(self.interface, **kw)
+        return cache[key]
+
+
+def _nearest(values: np.ndarray, t: float, what: str) -> int:
+    if len(values) == 0:
+        raise ConfigError(f"{what} {t!r}: the run holds none; accepted: a run that wrote them")
+    return int(np.argmin(np.abs(np.asarray(values) - float(t))))
+
+
+def open(path: str) -> Run:  # noqa: A001  (parslip.open mirrors the builtin on purpose)
+    """Open a run file read-only; raises ``ConfigError`` naming the path if it is not a parslip run file."""
+    return Run(path)

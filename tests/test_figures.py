@@ -1,0 +1,141 @@
+"""Figure code: the Mode II fit against an exact field, the numbers the figures plot against
+independent computations, and `parslip figures` / `parslip compare` writing their files."""
+import math
+import os
+
+import numpy as np
+import pytest
+
+import parslip
+from parslip.analysis import figures
+from parslip.cli import analysis_cmds, main
+
+
+@pytest.mark.parametrize("k2,xp", [(0.3, 0.02), (-0.05, 0.005), (1.7, 0.11)])
+def test_mode2_fit_recovers_an_exact_square_root_field(k2, xp):
+    xi = np.arange(1, 9) / 100.0                        # eight sites ahead, l = 100 a
+    sigma = k2 / np.sqrt(2 * np.pi * (xi + xp))
+    k_fit, xp_fit = figures.mode2_fit(xi, sigma)
+    assert k_fit == pytest.approx(k2, rel=1e-9) and xp_fit == pytest.approx(xp, rel=1e-8)
+
+
+def test_mode2_fit_refuses_a_rising_profile():
+    xi = np.arange(1, 6) / 100.0
+    assert all(math.isnan(v) for v in figures.mode2_fit(xi, 0.1 + xi))
+
+
+def test_figure_names_match_the_command_line():
+    assert analysis_cmds.FIGURE_NAMES == figures.FIGURES
+
+
+def test_slip_velocity_of_the_driven_edge_is_v0(small_run):
+    """Push drives the rear face, interface node included: u(x = 0) = v0 t, so u-dot = v0 exactly."""
+    run = parslip.open(small_run)
+    t, v = figures.slip_velocity(run, 0.0)
+    assert np.median(v[1:-1]) == pytest.approx(run.v0, rel=1e-6)
+    # and ahead of the edge the site moves in jumps: faster than v0 while a pulse passes
+    assert figures.slip_velocity(run, 0.5)[1].max() > 2 * run.v0
+
+
+def test_stress_profiles_and_leading_tip(small_run):
+    run = parslip.open(small_run)
+    fr = run.fronts()
+    times = figures.stress_times(run)
+    assert times == [f.nucleation_time for f in fr[:4]]                    # pulses: the nucleation times
+    f1, x1 = figures.leading_tip(fr, times[1])
+    assert f1 is fr[0] and x1 == fr[0].tip_at(times[1]) and x1 > 0.3      # front 1 is ahead when 2 starts
+    xi, s = figures.tip_profile(run, fr[0], times[1], "sxy")
+    k = run.frame_at(times[1])
+    assert np.all(xi > 0) and len(xi) == 8
+    np.testing.assert_array_equal(s, run.interface["sxy"][k, np.argsort(run.x)][np.isin(run.x, x1 + xi)])
+    assert np.all(run.interface["intact"][k, np.isin(run.x, x1 + xi)] == 1)   # the bonds ahead are intact
+    rows = figures.mode2_table(run)
+    assert rows and all(r["front"] in (1, 2, 3) for r in rows)
+
+
+def test_a_lone_front_is_profiled_along_its_run():
+    """One crack across the contact (as in T0): four moments from its start to its end (Fig. 7b)."""
+    from helpers import blank, draw
+    from parslip.analysis.results import Run
+    iface = blank(200)
+    arr = draw(iface, 30, 0, +1, 2, 1, 0.01, crack=True)
+    run = Run.from_arrays(iface, {"drive.mode": "shear", "drive.v0": 1e-4})
+    t = run.times[arr]
+    assert figures.stress_times(run) == pytest.approx([t[0], t[20], t[39], t[-1]])
+    assert figures.map_times(run) == pytest.approx([t[0], t[30], t[-1]])
+
+
+def test_slip_behind_tips_subtracts_the_drive_to_the_previous_nucleation(small_run):
+    run = parslip.open(small_run)
+    fr = run.fronts()
+    x, du, dv = figures.slip_behind_tips(run, 1)
+    np.testing.assert_allclose(du, fr[1].tip["u_behind"] - run.v0 * fr[0].nucleation_time)
+    # the site behind the tip at its arrival: read it straight from the interface record
+    j = 5
+    k = run.frame_at(fr[1].tip["t"][j])
+    s = figures.site_index(run, fr[1].tip["x"][j - 1])
+    assert fr[1].tip["u_behind"][j] == run.interface["ux"][k, s] - run.interface["ux"][0, s]
+    assert dv[j] == run.interface["uy"][k, s] - run.interface["uy"][0, s]
+
+
+def test_passages_mark_each_front_at_a_site(small_run):
+    run = parslip.open(small_run)
+    s = figures.site_index(run, 0.5)
+    marks = figures.passages(run, s)
+    crossing = [i for i, f in enumerate(run.fronts()) if f.tip["x"].max() >= run.x[s]]
+    assert [i for i, _ in marks] == crossing
+    for _, t in marks:                                              # the bond breaks in that frame
+        k = run.frame_at(t)
+        assert run.interface["intact"][k, s] == 0 and run.interface["intact"][k - 1, s] == 1
+
+
+def test_figures_command_writes_the_set(small_run, tmp_path, capsys):
+    out = tmp_path / "figs"
+    assert main(["figures", small_run, "-o", str(out)]) == 0
+    names = set(os.listdir(out))
+    for fig in ("spacetime", "front_speed", "interface_stress", "slip_records", "slip_behind_tips",
+                "slip_velocity", "pulse_width", "mode2_fit"):
+        assert {f"{fig}.png", f"{fig}.pdf"} <= names
+        assert (out / f"{fig}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (out / f"{fig}.pdf").read_bytes()[:5] == b"%PDF-"
+    rows = (out / "mode2_fit.csv").read_text().splitlines()
+    assert rows[0].startswith("front,t_l_per_cr,K_II") and len(rows) > 1
+    have_render = os.path.exists(os.path.join(os.path.dirname(figures.__file__), "render.py"))
+    assert any(n.startswith("map_sxy") for n in names) == have_render
+
+
+def test_compare_command_tabulates_speed_over_v0(small_run, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", small_run, small_run, "-o", str(out), "--scale", "v0", "--fronts", "2"]) == 0
+    lines = (out / "compare_speed.csv").read_text().splitlines()
+    assert len(lines) == 1 + 2 * 2
+    run = parslip.open(small_run)
+    f = run.fronts()[0]
+    cells = lines[1].split(",")
+    assert float(cells[4]) == pytest.approx(f.mean_speed, rel=1e-5)
+    assert float(cells[5]) == pytest.approx(f.mean_speed / run.v0, rel=1e-5)
+    assert (out / "compare_speed.png").exists() and (out / "compare_speed.pdf").exists()
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["figures", "RUN", "-o", "OUT", "--only", "nope"], "--only 'nope': unknown figure; accepted: spacetime"),
+    (["figures", "/nonexistent.vtkhdf", "-o", "OUT"], "RUN '/nonexistent.vtkhdf': no such file"),
+    (["compare", "RUN", "-o", "OUT", "--scale", "x"], "--scale 'x': unknown; accepted: auto, v0, c_r"),
+])
+def test_bad_input_one_line(argv, message, small_run, tmp_path, capsys):
+    argv = [small_run if a == "RUN" else str(tmp_path) if a == "OUT" else a for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err
+
+
+def test_a_run_without_fronts_still_gets_its_figures(tmp_path):
+    """Before the first break (a short shear run) every figure is drawn, empty where there is no front."""
+    from helpers import blank
+    from parslip.analysis.results import Run
+    iface = blank(50)
+    iface["sxy"] = iface["syy"] = np.zeros_like(iface["ux"])
+    run = Run.from_arrays(iface, {"drive.mode": "shear", "drive.v0": 1e-4})
+    paths = figures.write_all(run, str(tmp_path))
+    assert sum(p.endswith(".png") for p in paths) == 8          # all but the stress maps (no snapshots)
+    assert (tmp_path / "mode2_fit.csv").read_text().count("\n") == 1
