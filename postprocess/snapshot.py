@@ -4,7 +4,7 @@
 
 Fields: sxx, syy, sxy (rho c_r^2), vx, vy, speed (internal velocity unit).
 The same picture comes from `parslip render RUN --field F --time T -o PNG`;
-in ParaView open the .vtkhdf (5.12 and newer) or the .xdmf next to it (5.11).
+in ParaView open the .vtkhdf (5.12 and newer) or the .xdmf2 next to it (5.11 on).
 """
 import argparse
 import os

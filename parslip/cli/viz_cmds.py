@@ -5,7 +5,7 @@ function that imports what it needs, so `parslip --help` stays fast.
 
     parslip render out/push.vtkhdf --field sxy --time 50 -o sxy.png
     parslip render out/push.vtkhdf --field sxy --movie sxy.mp4
-    parslip xdmf out/push.vtkhdf          # rewrite out/push.xdmf (ParaView 5.11+)
+    parslip xdmf out/push.vtkhdf          # rewrite out/push.xdmf2 (ParaView 5.11+)
 """
 from __future__ import annotations
 
@@ -36,11 +36,11 @@ def register(sub) -> None:
     r.set_defaults(func=cmd_render)
 
     x = sub.add_parser("xdmf", help="(re)write a run's XDMF sidecar, which ParaView 5.11 and newer open "
-                       "as a time series", description="Write RUN's .xdmf sidecar: the snapshots as a "
+                       "as a time series", description="Write RUN's .xdmf2 sidecar: the snapshots as a "
                        "temporal collection pointing into RUN's datasets (no data copied).  `parslip run` "
-                       "writes it; rerun this after moving, repacking or rewriting RUN.")
+                       "writes it; rerun this after renaming RUN.")
     x.add_argument("run", metavar="RUN", help="run file written by `parslip run` (.vtkhdf)")
-    x.add_argument("-o", "--out", metavar="XDMF", help="sidecar to write (default: RUN with suffix .xdmf)")
+    x.add_argument("-o", "--out", metavar="XDMF", help="sidecar to write (default: RUN with suffix .xdmf2)")
     x.set_defaults(func=cmd_xdmf)
 
 

@@ -1,11 +1,11 @@
 """The XDMF sidecar of a run file: the snapshots as a time series for any ParaView.
 
-Responsible for ``<run>.xdmf``, an XML file next to the run file that points
+Responsible for ``<run>.xdmf2``, an XML file next to the run file that points
 into its ``/VTKHDF`` datasets, one grid per snapshot.  ParaView from 5.11 on
 (Debian 12's package, whose VTKHDF reader knows format 1.0 only and shows
-every snapshot stacked as one mesh) opens it as a time series; so do VTK's
-``vtkXdmfReader`` and pyvista (``pv.read``, ``pv.get_reader``).  Newer
-ParaView also opens the ``.vtkhdf`` itself.  The sidecar holds no data and
+every snapshot stacked as one mesh) opens it as a time series with its
+"XDMF Reader"; so do VTK's ``vtkXdmfReader`` and pyvista.  Newer ParaView
+also opens the ``.vtkhdf`` itself.  The sidecar holds no data and
 can be rewritten at any time (``parslip xdmf RUN``).
 
 What it describes, per snapshot k of S (N points, M cells per snapshot; the
@@ -22,22 +22,20 @@ flat datasets hold the snapshots one after the other):
               (rho c_r^2), rows k*N ..
   Cell fields interface (1 for an interface bond), intact (1 if intact), rows k*M ..
 
-Two ways to point at a slice, chosen per file:
+Each slice is an XDMF ``HyperSlab`` (start, stride, count per axis) of the
+HDF5 dataset named by path, so it holds whatever the storage layout.
 
-* ``Binary`` with ``Seek``: the byte address of the slice inside the HDF5 file
-  (contiguous storage address + first row x row size).  ParaView 5.11's three
-  XDMF readers (XDMF Reader, Xdmf3ReaderS, Xdmf3ReaderT) all read it, so any
-  reader a user picks in ParaView's dialog shows the data.  Usable only when
-  every dataset is stored contiguous, unfiltered and little-endian (what
-  ``io.output`` writes) and every address is below 2**31 (both XDMF libraries
-  parse ``Seek`` with ``atoi``), i.e. files up to about 2 GiB.
-* ``HyperSlab`` (start, stride, count) into the HDF5 dataset by name: the XDMF
-  standard, independent of storage layout and size.  ParaView 5.11 reads it
-  with "XDMF Reader" only: its Xdmf3 readers return no points for a
-  floating-point hyperslab.  Used when the Binary rule above does not hold.
+Why ``.xdmf2``: ParaView offers three readers for ``.xmf``/``.xdmf`` (a dialog
+in the GUI; ``OpenDataFile`` takes Xdmf3ReaderS) but only "XDMF Reader" (the
+Xdmf2 library) for ``.xmf2``/``.xdmf2``, and only that one reads these files:
+the Xdmf3 readers of 5.11 return no points for a floating-point HyperSlab.
+Byte-addressed ``Binary``/``Seek`` items, which the Xdmf3 readers do take,
+were measured wrong in "XDMF Reader" (it caches topology and geometry by
+data-file name, so every step showed the first step's mesh) and limited to
+2 GiB (``Seek`` is parsed with ``atoi``).  pyvista reads the sidecar with
+``pv.get_reader(path, force_ext=".xdmf")``; it reads the ``.vtkhdf`` itself too.
 
-A rewritten or repacked run file moves the addresses: rewrite the sidecar
-(``parslip xdmf RUN``) after anything but ``parslip run`` has written the file.
+Rewrite the sidecar (``parslip xdmf RUN``) after renaming the run file.
 """
 from __future__ import annotations
 
@@ -49,10 +47,9 @@ import numpy as np
 from ..errors import ConfigError
 from .contract import VTKHDF, check_run_file
 
-SUFFIX = ".xdmf"
-ATOI_MAX = 2**31 - 1        # largest Seek both XDMF libraries parse (atoi into int)
+SUFFIX = ".xdmf2"           # the extension ParaView gives to "XDMF Reader" alone (see above)
 
-# name in the file -> (XDMF AttributeType, Center); sizes and types come from the datasets.
+# name in the file -> XDMF AttributeType; sizes and number types come from the datasets.
 POINT_FIELDS = {"velocity": "Vector", "sxx": "Scalar", "syy": "Scalar", "sxy": "Scalar"}
 CELL_FIELDS = {"interface": "Scalar", "intact": "Scalar"}
 
@@ -62,7 +59,7 @@ _NUMBER_TYPE = {("f", 8): "Float", ("f", 4): "Float", ("i", 8): "Int", ("i", 4):
 
 
 def sidecar_path(run_path: str) -> str:
-    """``out/push.vtkhdf`` -> ``out/push.xdmf``."""
+    """``out/push.vtkhdf`` -> ``out/push.xdmf2``."""
     return os.path.splitext(run_path)[0] + SUFFIX
 
 
@@ -97,29 +94,25 @@ def _document(v, ref: str) -> str:
     times = np.asarray(v["Steps"]["Values"][...], dtype=float)
     S = len(times)
     N, M = int(v["NumberOfPoints"][0]), int(v["NumberOfCells"][0])
-    names = ["Points", "Connectivity"] + [f"PointData/{n}" for n in POINT_FIELDS] + \
-            [f"CellData/{n}" for n in CELL_FIELDS]
-    binary = all(_binary_ok(v[n]) for n in names)
-    item = _binary_item if binary else _hyperslab_item
     lines = ['<?xml version="1.0" ?>',
              '<!-- parslip snapshots: positions in a, stress in rho c_r^2, times in l/c_r; '
-             f'{"Binary/Seek into" if binary else "HyperSlabs of"} {escape(ref)} -->',
+             f'HyperSlabs of {escape(ref)}; rewrite with `parslip xdmf RUN` -->',
              '<Xdmf Version="2.0">', "<Domain>",
              '<Grid Name="snapshots" GridType="Collection" CollectionType="Temporal">']
     for k in range(S):
         lines.append(f'<Grid Name="snapshot {k}" GridType="Uniform">')
         lines.append(f'<Time TimeType="Single" Value="{float(times[k])!r}"/>')
         lines.append(f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{M}">')
-        lines.append(item(v, ref, "Connectivity", 2 * k * M, 2 * M, shape=(M, 2)))
+        lines.append(_hyperslab(v, ref, "Connectivity", 2 * k * M, 2 * M, shape=(M, 2)))
         lines.append("</Topology>")
         lines.append('<Geometry GeometryType="XYZ">')
-        lines.append(item(v, ref, "Points", k * N, N))
+        lines.append(_hyperslab(v, ref, "Points", k * N, N))
         lines.append("</Geometry>")
         for group, fields, rows, first in (("PointData", POINT_FIELDS, N, k * N), ("CellData", CELL_FIELDS, M, k * M)):
             center = "Node" if group == "PointData" else "Cell"
             for name, kind in fields.items():
                 lines.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" Center="{center}">')
-                lines.append(item(v, ref, f"{group}/{name}", first, rows))
+                lines.append(_hyperslab(v, ref, f"{group}/{name}", first, rows))
                 lines.append("</Attribute>")
         lines.append("</Grid>")
     lines += ["</Grid>", "</Domain>", "</Xdmf>", ""]
@@ -136,30 +129,14 @@ def _type_attrs(ds) -> str:
     return f'NumberType="{number}" Precision="{dt.itemsize}"'
 
 
-def _binary_ok(ds) -> bool:
-    """Raw bytes of ``ds`` are addressable: contiguous, unfiltered, little-endian, allocated, below 2**31."""
-    addr = ds.id.get_offset()
-    order = ds.dtype.byteorder
-    little = order in "<|" or (order == "=" and np.little_endian)
-    return (ds.chunks is None and not ds.compression and little and addr is not None
-            and addr + ds.id.get_storage_size() <= ATOI_MAX)
-
-
 def _dims(ds, rows: int, shape) -> str:
     return " ".join(map(str, shape or ((rows,) + ds.shape[1:])))
 
 
-def _binary_item(v, ref, name, first, rows, shape=None) -> str:
-    """Rows ``first .. first+rows-1`` of ``/VTKHDF/name`` by byte address (Seek) in the run file."""
-    ds = v[name]
-    row_bytes = ds.dtype.itemsize * int(np.prod(ds.shape[1:], dtype=np.int64))
-    seek = ds.id.get_offset() + first * row_bytes
-    return (f'<DataItem Format="Binary" Endian="Little" Seek="{seek}" Dimensions="{_dims(ds, rows, shape)}" '
-            f'{_type_attrs(ds)}>{escape(ref)}</DataItem>')
-
-
-def _hyperslab_item(v, ref, name, first, rows, shape=None) -> str:
-    """Rows ``first .. first+rows-1`` of ``/VTKHDF/name`` as an XDMF HyperSlab (start, stride, count per axis)."""
+def _hyperslab(v, ref, name, first, rows, shape=None) -> str:
+    """Rows ``first .. first+rows-1`` of ``/VTKHDF/name`` as an XDMF HyperSlab: a 3 x rank XML
+    array (start, stride, count per axis) and the whole HDF5 dataset it selects from; ``shape``
+    overrides the result's dimensions (the flat connectivity read as M x 2)."""
     ds = v[name]
     rank = ds.ndim
     start = [first] + [0] * (rank - 1)
