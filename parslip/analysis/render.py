@@ -107,17 +107,22 @@ def snapshot_index(run, time: float | None) -> int:
 
 @dataclass
 class Frame:
-    """What a rendered frame shows: snapshot index, its time (l/c_r), the colour limits, and the
-    display pixel (column, row from the top) of a world point, for checking where things landed."""
+    """What a rendered frame shows: snapshot index, its time (l/c_r), the colour limits, and
+    the view: ``focal`` (x, y in a) at the window's centre, ``half_height`` (a) from there to
+    the top edge (parallel projection, so the map from the plane to pixels is affine)."""
     step: int
     time: float
     clim: tuple[float, float]
     path: str
     window: tuple[int, int]
-    _world_to_display: object = None
+    focal: tuple[float, float]
+    half_height: float
 
-    def pixel(self, xyz) -> tuple[float, float]:
-        return self._world_to_display(xyz)
+    def pixel(self, xy) -> tuple[float, float]:
+        """(column, row from the top) of the world point ``xy`` (a) in the picture."""
+        w, h = self.window
+        per_a = 0.5 * h / self.half_height             # pixels per lattice spacing, both axes
+        return (0.5 * w + (xy[0] - self.focal[0]) * per_a, 0.5 * h - (xy[1] - self.focal[1]) * per_a)
 
 
 def _contact_view(mesh, window=WINDOW) -> tuple[tuple[float, float, float], float]:
@@ -156,12 +161,14 @@ class _Scene:
         self.window = tuple(window)
 
     def frame_on(self, mesh):
+        """Point the camera at the contact; return (focal point, half height) for ``Frame``."""
         focal, half_h = _contact_view(mesh, self.window)
         cam = self.pl.camera
         cam.focal_point = focal
         cam.position = (focal[0], focal[1], focal[2] + 10 * half_h)
         cam.up = (0.0, 1.0, 0.0)
         cam.parallel_scale = half_h
+        return focal[:2], half_h
 
     def draw(self, mesh, name: str, f: Field, clim, time: float):
         pl = self.pl
@@ -178,17 +185,6 @@ class _Scene:
             pl.add_mesh(intact, color=INTACT_RGB, line_width=4, lighting=False)
         pl.add_text(f"{name}   t = {time:.3f} l/c_r   red: intact interface bonds", position="upper_left",
                     font_size=12, color="black", name="caption")
-
-    def world_to_display(self):
-        """Map a world point to (column, row-from-top) pixels with the current camera."""
-        ren, h = self.pl.renderer, self.window[1]
-
-        def to_pixel(xyz):
-            ren.SetWorldPoint(float(xyz[0]), float(xyz[1]), float(xyz[2]) if len(xyz) > 2 else 0.0, 1.0)
-            ren.WorldToDisplay()
-            x, y, _ = ren.GetDisplayPoint()
-            return x, h - 1 - y
-        return to_pixel
 
     def close(self):
         self.pl.close()
@@ -210,10 +206,10 @@ def render_frame(run, field: str, time: float | None, png: str, *, clim=None, wi
     t = float(run.snapshot_times[k])
     sc = _Scene(window)
     try:
-        sc.frame_on(mesh)
+        focal, half_h = sc.frame_on(mesh)
         sc.draw(mesh, field, f, clim, t)
         sc.pl.screenshot(png)
-        return Frame(k, t, clim, png, tuple(window), sc.world_to_display())
+        return Frame(k, t, clim, png, tuple(window), focal, half_h)
     finally:
         sc.close()
 
