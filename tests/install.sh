@@ -9,13 +9,11 @@ cd "$(dirname "$0")/.."
 
 # --- Python: the package with its [mpich,test,viz] extras ---------------------------------------
 install_python() {
-    # Where this checkout is already the parslip Python imports (an editable install of it, or
-    # PYTHONPATH pointing here), only the dependencies are installed: an editable install made
-    # from another checkout on a shared machine is left pointing where it points.
-    local here
-    here=$(cd / && python -c "import os, parslip; print(os.path.dirname(os.path.dirname(parslip.__file__)))" \
-           2>/dev/null || true)
-    if [ -n "$here" ] && [ "$(cd "$here" && pwd -P)" = "$(pwd -P)" ]; then
+    # An editable install that already exists (on a shared machine: another checkout's) is left
+    # pointing where it points, and only the dependencies are installed: the suite imports this
+    # checkout anyway, as pytest runs from its root (or through PYTHONPATH).  Otherwise this
+    # checkout is installed editable, as on a fresh machine.
+    if python -m pip show parslip 2>/dev/null | grep -q "^Editable project location:"; then
         local reqs
         reqs=$(mktemp)
         python - <<'EOF' > "$reqs"

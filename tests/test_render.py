@@ -132,8 +132,10 @@ def test_bad_input_is_one_line_and_exit_2(case, small_run, tmp_path, capsys):
 
 def test_snapshot_script_renders_through_render_py(small_run, tmp_path):
     png = tmp_path / "s.png"
-    script = os.path.join(os.path.dirname(__file__), "..", "postprocess", "snapshot.py")
-    p = subprocess.run([sys.executable, script, small_run, "--step", "1", "--field", "syy", "--png", str(png)],
-                       capture_output=True, text=True, timeout=300)
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    # A script's own folder heads sys.path, not the checkout: name the checkout, whatever is installed.
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")])))
+    p = subprocess.run([sys.executable, os.path.join(root, "postprocess", "snapshot.py"), small_run, "--step", "1",
+                        "--field", "syy", "--png", str(png)], capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == 0, p.stderr
     assert Image.open(png).size == WINDOW and "step 1 of" in p.stdout
