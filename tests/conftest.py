@@ -1,11 +1,32 @@
-"""Fixtures shared by the analysis tests: one short real push run, made once per session."""
+"""Fixtures shared by the analysis tests: one short real push run, made once per session.
+
+Also puts the MPI launcher that matches mpi4py's MPI first on PATH for the whole suite.
+"""
 import os
+import sysconfig
 
 import pytest
 
 from helpers import small_toml
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+
+def _mpi_launcher_first_on_path() -> None:
+    """Make ``mpiexec`` (mpi-pytest's and the tests' ``shutil.which``) the launcher of mpi4py's MPI.
+
+    The ``mpich`` wheel installs its ``mpiexec`` in this Python's scripts folder.
+    Debian's paraview, installed for the pvpython tests, brings Open MPI's
+    ``mpirun``/``mpiexec`` into /usr/bin; a launcher of another MPI starts n
+    singleton jobs of size 1 instead of one job of size n.  Where no launcher
+    sits beside Python (a cluster's own MPI), PATH stays as the environment set it.
+    """
+    scripts = sysconfig.get_path("scripts")
+    if os.access(os.path.join(scripts, "mpiexec"), os.X_OK):
+        os.environ["PATH"] = scripts + os.pathsep + os.environ.get("PATH", "")
+
+
+_mpi_launcher_first_on_path()
 
 # SMALL driven long enough for three to four pulses from the rear edge.
 SMALL_RUN = {"drive.duration": 10.0, "output.snapshots": 4}

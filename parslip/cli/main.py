@@ -176,6 +176,9 @@ def cmd_run(args) -> int:
     wall = time.monotonic() - t0
     writer.close("complete")
     counts = comm.reduce(sim.counters.copy(), root=0) if size > 1 else sim.counters
+    if rank == 0 and st.n_snapshots:    # snapshots as a time series for any ParaView (io/xdmf.py); no collective follows
+        from ..io.xdmf import write_xdmf
+        write_xdmf(out)
     if rank == 0:
         ups = st.n_steps * st.lattice.n_nodes / wall
         log.info(f"done in {wall:.1f} s: {st.n_steps / wall:,.0f} steps/s, {ups / 1e6:.1f} M node-updates/s "

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Installs what the test suite needs; the README's test command runs it before pytest:
+#
+#     bash tests/install.sh && python -m pytest
+#
+# Each part is one function, idempotent and quiet when there is nothing to do.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# --- Python: the package with its [mpich,test,viz] extras ---------------------------------------
+install_python() {
+    # An editable install that already exists (on a shared machine: another checkout's) is left
+    # pointing where it points, and only the dependencies are installed: the suite imports this
+    # checkout anyway, as pytest runs from its root (or through PYTHONPATH).  Otherwise this
+    # checkout is installed editable, as on a fresh machine.
+    if python -m pip show parslip 2>/dev/null | grep -q "^Editable project location:"; then
+        local reqs
+        reqs=$(mktemp)
+        python - <<'EOF' > "$reqs"
+try:
+    import tomllib
+except ImportError:                     # Python 3.10
+    import tomli as tomllib
+p = tomllib.load(open("pyproject.toml", "rb"))["project"]
+reqs = list(p["dependencies"])
+for extra in ("mpich", "test", "viz"):
+    reqs += p["optional-dependencies"][extra]
+print("\n".join(reqs))
+EOF
+        PIP_ROOT_USER_ACTION=ignore python -m pip install -q --disable-pip-version-check -r "$reqs"
+        rm -f "$reqs"
+    else
+        PIP_ROOT_USER_ACTION=ignore python -m pip install -q --disable-pip-version-check -e ".[mpich,test,viz]"
+    fi
+}
+
+# --- ParaView: the real client the sidecar tests open files with (tests/test_xdmf.py) -----------
+# Debian 12's ParaView 5.11: pvpython is in python3-paraview.  Recommends are skipped (docs, and
+# mpi-default-bin; Open MPI comes anyway through python3-mpi4py, and tests/conftest.py keeps the
+# suite's mpiexec on mpi4py's MPI).  Without apt-get the pvpython tests skip and say why.
+install_paraview() {
+    if command -v pvpython >/dev/null 2>&1; then
+        return 0
+    fi
+    if ! command -v apt-get >/dev/null 2>&1; then
+        echo "tests/install.sh: no apt-get here; install ParaView >= 5.11 with pvpython, or its tests skip" >&2
+        return 0
+    fi
+    local sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        sudo="sudo -n"
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    # Another apt-get may hold the lock on a shared machine: wait for it rather than fail.
+    $sudo apt-get install -y -qq -o DPkg::Lock::Timeout=900 --no-install-recommends \
+        paraview python3-paraview >/dev/null
+    command -v pvpython >/dev/null
+}
+
+install_python
+install_paraview
