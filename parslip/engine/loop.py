@@ -48,9 +48,9 @@ I_SIZE = 12
 # Float parameters ``fp`` (float64).
 F_DT, F_V0, F_FEXT, F_JUMP = range(4)
 F_SIZE = 4
-# State-type parameters ``sp``.
-S_DT2, S_KEEP, S_INV, S_DAMPED = range(4)
-S_SIZE = 4
+# State-type parameters ``sp``: C = dt^2/(1 + zeta dt/2), the factor on forces; 1 if zeta > 0.
+S_CF, S_DAMPED = range(2)
+S_SIZE = 2
 
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)
@@ -60,16 +60,18 @@ FLAG_NONFINITE, FLAG_RUNAWAY, FLAG_REACH, FLAG_DRIFT, FLAG_MPI = 1, 2, 4, 8, 16
 (L_BITS, L_STEP, L_BLOCK, L_ROW, L_COL, L_VALUE) = range(6)
 L_SIZE = 8
 
-# Phase timers (ns), accumulated in ``timers``: [interface bonds, early tasks, post, other tasks, complete,
-# checks and agreement, frames]; timers[T_CLOCK:T_CLOCK+2] is the clock's scratch space.
-T_IFACE, T_EARLY, T_POST, T_LATE, T_COMPLETE, T_CHECK, T_FRAMES, T_CLOCK = range(8)
-T_SIZE = 10
+# Phase timers (ns), accumulated in ``timers`` over one step in TIME_EVERY: [interface bonds, early tasks,
+# post, other tasks, complete] and the number of timed steps; checks and frames are timed whenever they
+# run; timers[T_CLOCK:T_CLOCK+2] is the clock's scratch space.
+T_IFACE, T_EARLY, T_POST, T_LATE, T_COMPLETE, T_CHECK, T_FRAMES, T_SAMPLES, T_CLOCK = range(9)
+T_SIZE = 11
+TIME_EVERY = 16
 
 # Why ``advance`` returned.
 DONE, FRAMES_FULL, STOPPED = 0, 1, 2
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _flag(flags, bit, step, block, row, col, value):
     if flags[L_BITS] == 0:
         flags[L_STEP] = step
@@ -83,20 +85,19 @@ def _flag(flags, bit, step, block, row, col, value):
 @njit(cache=True, _nrt=False)
 def _rows(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, zeros, drive0, drive_on, shift, gy):
     """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN)."""
-    dt2, keep, inv = sp[S_DT2], sp[S_KEEP], sp[S_INV]
+    cf = sp[S_CF]
     damped = sp[S_DAMPED] != 0
-    zero = like(0, dt2)
+    zero = like(0, cf)
     for t in range(t0, t1):
         b, r, j0, n, kind, extra, load, drive, s = (tasks[t, 0], tasks[t, 1], tasks[t, 2], tasks[t, 3],
                                                     tasks[t, 4], tasks[t, 6], tasks[t, 7], tasks[t, 8], tasks[t, 10])
         g = gy if load else zero
         if kind == FULL:
-            row_full(cx, cy, px, py, r, j0, n, s, K, b, dt2, keep, inv, damped)
+            row_full(cx, cy, px, py, r, j0, n, s, K, b, damped)
         elif extra:
-            row_edge(cx, cy, px, py, r, j0, n, s, K, b, dt2, keep, inv, damped, kind == NO_DOWN, ex, ey, zero, g)
+            row_edge(cx, cy, px, py, r, j0, n, s, K, b, damped, kind == NO_DOWN, cf, ex, ey, zero, g)
         else:
-            row_edge(cx, cy, px, py, r, j0, n, s, K, b, dt2, keep, inv, damped, kind == NO_DOWN, zeros, zeros,
-                     zero, g)
+            row_edge(cx, cy, px, py, r, j0, n, s, K, b, damped, kind == NO_DOWN, cf, zeros, zeros, zero, g)
         if drive and drive_on:
             for j in range(j0, j0 + n):
                 px[r, j] = drive0[r, j] + shift
@@ -105,15 +106,15 @@ def _rows(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, zeros, drive0, drive_on,
 @njit(cache=True, _nrt=False)
 def _nodes(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, drive0, drive_on, shift, gy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
-    dt2, keep, inv = sp[S_DT2], sp[S_KEEP], sp[S_INV]
+    cf = sp[S_CF]
     damped = sp[S_DAMPED] != 0
-    zero = like(0, dt2)
+    zero = like(0, cf)
     for t in range(t0, t1):
         b, r, j, mask, extra, load, drive, s = (tasks[t, 0], tasks[t, 1], tasks[t, 2], tasks[t, 5], tasks[t, 6],
                                                 tasks[t, 7], tasks[t, 8], tasks[t, 10])
         fx = ex[j] if extra else zero
         fy = (ey[j] if extra else zero) + (gy if load else zero)
-        node_masked(cx, cy, px, py, r, j, s, K, b, dt2, keep, inv, damped, mask, fx, fy)
+        node_masked(cx, cy, px, py, r, j, s, K, b, damped, mask, cf, fx, fy)
         if drive and drive_on:
             px[r, j] = drive0[r, j] + shift
 
@@ -142,7 +143,7 @@ def _row_moves(cx, cy, px, py, r, j0, n):
     return acc
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _check(n, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, ip, jump, iface, flags):
     """Owned nodes of u(n+1): finite, and moved less than ``jump`` a in the step (else: runaway);
     the substrate's owned interface sites within ``drift`` of their columns.
@@ -182,55 +183,60 @@ def _check(n, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, ip, jump, iface, fl
                 return
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _step(n, cbx, cby, ctx, cty, nbx, nby, ntx, nty, plan, tasks, ptr, K, ip, fp, sp, iface, drive0,
           flags, tm):
     n_ds = ip[I_NDS]
     drive_on = ip[I_DRIVE] != 0 and n >= n_ds
     if ip[I_DRIVE] != 0 and n == n_ds:
-        drive0[:, :] = ctx[:, :]
+        for r in range(drive0.shape[0]):
+            for j in range(drive0.shape[1]):
+                drive0[r, j] = ctx[r, j]
     nr = ip[I_NRAMP]
     lf = 1.0 if nr == 0 else min(1.0, n / nr)
-    gy = like(lf * fp[F_FEXT], sp[S_DT2])
-    shift = like(fp[F_V0] * ((n + 1 - n_ds) * fp[F_DT]), sp[S_DT2])
+    gy = like(lf * fp[F_FEXT], sp[S_CF])
+    shift = like(fp[F_V0] * ((n + 1 - n_ds) * fp[F_DT]), sp[S_CF])
     clk = tm[T_CLOCK:T_CLOCK + 2]
-    t0 = now_ns(clk)
+    timed = n % TIME_EVERY == 0           # sample the phase times: a clock read costs about 25 ns
+    t0 = now_ns(clk) if timed else 0
     if ip[I_HAS_IFACE] != 0:
         br = ip[I_BROW]
         ik.update(ctx[PAD], cty[PAD], cbx[br], cby[br], iface.partner, iface.x0, iface.taken, iface.claim,
-                  iface.geom, iface.consts, iface.counters, iface.reach)
+                  iface.geom, iface.consts, iface.counters, iface.reach, iface.ext_x, iface.ext_y, iface.exb_x,
+                  iface.exb_y)
         if iface.reach[0] >= 0:
             _flag(flags, FLAG_REACH, n, 1, 0, iface.reach[0], 0.0)
             iface.reach[0] = -1
         if not ik.coverage(ctx[PAD], cbx[br], iface.geom):
             _flag(flags, FLAG_REACH, n, 1, 0, -1, 0.0)
-        ik.forces(ctx[PAD], cty[PAD], cbx[br], cby[br], iface.partner, iface.x0, iface.geom, iface.consts,
-                  iface.ext_x, iface.ext_y, iface.exb_x, iface.exb_y)
-    t1 = now_ns(clk)
+    t1 = now_ns(clk) if timed else 0
     _tasks(0, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy)
-    t2 = now_ns(clk)
+    t2 = now_ns(clk) if timed else 0
     err = exchange(POST, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, flags)
-    t3 = now_ns(clk)
+    t3 = now_ns(clk) if timed else 0
     _tasks(1, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy)
-    t4 = now_ns(clk)
+    t4 = now_ns(clk) if timed else 0
     err |= exchange(COMPLETE, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, flags)
-    t5 = now_ns(clk)
-    tm[T_IFACE] += t1 - t0
-    tm[T_EARLY] += t2 - t1
-    tm[T_POST] += t3 - t2
-    tm[T_LATE] += t4 - t3
-    tm[T_COMPLETE] += t5 - t4
+    if timed:
+        t5 = now_ns(clk)
+        tm[T_IFACE] += t1 - t0
+        tm[T_EARLY] += t2 - t1
+        tm[T_POST] += t3 - t2
+        tm[T_LATE] += t4 - t3
+        tm[T_COMPLETE] += t5 - t4
+        tm[T_SAMPLES] += 1
     if err != 0:
         _flag(flags, FLAG_MPI, n, -1, -1, -1, float(err))
 
 
-@njit(cache=True)
-def _record(n, lv, ip, iface, frames):
+@njit(cache=True, _nrt=False)
+def _record(n, lv, ip, iface, frames, tm):
     """Record frame k at step n if due; False when the buffer is full (the caller must flush first)."""
     k = n - ip[I_NDS]
     fe = ip[I_FRAME_EVERY]
     if k < 0 or k % fe != 0 or k // fe >= ip[I_NFRAMES]:
         return True
+    t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
     k //= fe
     cur = frames.cursor
     if k <= cur[C_LAST]:
@@ -249,6 +255,7 @@ def _record(n, lv, ip, iface, frames):
     frames.step[slot] = n
     cur[C_COUNT] = slot + 1
     cur[C_LAST] = k
+    tm[T_FRAMES] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
     return True
 
 
@@ -264,9 +271,7 @@ def advance(n0, n1, lv, plan, tasks, ptr, K, ip, fp, sp, iface, drive0, frames, 
     check = ip[I_CHECK]
     jump = fp[F_JUMP]
     while True:
-        t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
-        ok = _record(n, lv, ip, iface, frames)
-        tm[T_FRAMES] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
+        ok = _record(n, lv, ip, iface, frames, tm)
         if not ok:
             return n, FRAMES_FULL
         if n >= n1:

@@ -55,7 +55,7 @@ class Simulation:
                       self.layout.blocks[1].parity]
         fext = -sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0
         self.fp = np.array([st.dt, st.v0, fext, RUNAWAY_JUMP], np.float64)
-        self.sp = np.array([st.dt * st.dt, 1.0 - c, 1.0 / (1.0 + c), float(zeta > 0)], self.dtype)
+        self.sp = np.array([st.dt * st.dt / (1.0 + c), float(zeta > 0)], self.dtype)
         self.flags = np.zeros(L.L_SIZE, np.int64)
         self.gflags = np.zeros(L.L_SIZE, np.int64)
         self.timers = np.zeros(L.T_SIZE, np.int64)

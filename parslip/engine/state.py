@@ -19,10 +19,14 @@ from .kernels import interface as ik
 from .loop import Iface, Levels
 
 
-def stiffness_constants(kn: float, kt: float) -> np.ndarray:
-    """[k_n, k_t, A, B, C] of ``kernels.stencil``: A = (k_n-k_t)/4 + k_t, B = sqrt(3)(k_n-k_t)/4, C = 3(k_n-k_t)/4 + k_t."""
+def stiffness_constants(kn: float, kt: float, dt: float, zeta: float) -> np.ndarray:
+    """[C k_n, C k_t, C A, C B', C C', B] of ``kernels.stencil``: A = (k_n-k_t)/4 + k_t, B' = sqrt(3)(k_n-k_t)/4,
+    C' = 3(k_n-k_t)/4 + k_t, C = dt^2/(1 + zeta dt/2), B = (1 - zeta dt/2)/(1 + zeta dt/2)."""
     d = kn - kt
-    return np.array([kn, kt, d / 4 + kt, np.sqrt(3.0) * d / 4, 3 * d / 4 + kt])
+    c = 0.5 * zeta * dt
+    cf = dt * dt / (1.0 + c)
+    return np.array([cf * kn, cf * kt, cf * (d / 4 + kt), cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt),
+                     (1.0 - c) / (1.0 + c)])
 
 
 class State:
@@ -38,8 +42,9 @@ class State:
             return np.zeros(b.shape, dt)
 
         self.levels = Levels(*(block(bl) for _ in range(4)), *(block(tl) for _ in range(4)))
-        self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom),
-                           stiffness_constants(mat.kn_top, mat.kt_top)], dt)
+        zeta = sc["time.zeta"]
+        self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom, setup.dt, zeta),
+                           stiffness_constants(mat.kn_top, mat.kt_top, setup.dt, zeta)], dt)
         self.drive0 = block(tl)
 
         # Interface ------------------------------------------------------------

@@ -74,7 +74,7 @@ def build_plan(layout, dtype, comm=None) -> Plan:
                 rflags=np.zeros(8, np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _pack(plan, i, bx, by, tx, ty, partner, x0):
     buf = plan.sbuf
     k = plan.sb_ptr[i]
@@ -98,7 +98,7 @@ def _pack(plan, i, bx, by, tx, ty, partner, x0):
         k += n
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _unpack(plan, i, bx, by, tx, ty, partner, x0):
     buf = plan.rbuf
     k = plan.rb_ptr[i]
@@ -122,7 +122,7 @@ def _unpack(plan, i, bx, by, tx, ty, partner, x0):
         k += n
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
     """One phase of the halo exchange of ``plan`` (see the module docstring); returns the OR of MPI error codes.
 

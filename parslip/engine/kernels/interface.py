@@ -42,51 +42,61 @@ P_DELTA0, P_DELTAB, P_KX, P_KY, P_REFORM_ZERO, P_DRIFT, P_INV_L, P_TRACTION = ra
 P_SIZE = 8
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _gap(g, q, tx, ty, bx, by, j, i, d0):
     """(x_ij, y_ij) of top site at local column j (global g) and bottom site local i (global q)."""
     return like(g - q, d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
 
 
-@njit(cache=True)
-def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach):
-    """Steps 1-3 above on every local top site.  tx, ty: the block's row 0 at u(t); bx, by: the substrate's
-    interface row.  ``partner`` holds global bottom columns (-1: broken), indexed by local top column.
+@njit(cache=True, _nrt=False)
+def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext_x, ext_y, exb_x, exb_y):
+    """Steps 1-3 above on every local top site, then the bond forces at u(t).
 
-    ``reach[0]`` becomes the global column of the first OWNED top site whose bond or
-    re-bonding window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
+    tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row.  ``partner`` holds global
+    bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
+    (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
+    there is no bond.  ``claim`` is scratch: the free sites, then their claims.
+
+    ``reach[0]`` becomes the global column of the first OWNED top site whose bond or re-bonding
+    window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
     """
     tbase, tlo, thi, town0, town1 = g[G_TBASE], g[G_TLO], g[G_THI], g[G_TOWN0], g[G_TOWN1]
     bbase, blo, bhi, bcols, w = g[G_BBASE], g[G_BLO], g[G_BHI], g[G_BCOLS], g[G_WINDOW]
-    d0, db = p[P_DELTA0], p[P_DELTAB]
+    bown0, bown1 = g[G_BOWN0], g[G_BOWN1]
+    d0, db, kx, ky = p[P_DELTA0], p[P_DELTAB], p[P_KX], p[P_KY]
     db2, d02 = db * db, d0 * d0
+    zero = like(0, d0)
+    for i in range(blo, bhi):
+        taken[i] = 0
+    for i in range(bown0, bown1):
+        exb_x[i] = zero
+        exb_y[i] = zero
+    # 1. Breaks; the bonds that hold mark their substrate site taken.  Free sites are listed in ``claim``.
+    nfree = 0
     for j in range(tlo, thi):
         q = partner[j]
-        if q < 0:
-            continue
-        i = q - bbase
-        if i < blo or i >= bhi:
-            if town0 <= j < town1 and reach[0] < 0:
-                reach[0] = j + tbase
-            continue
-        dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-        if dx * dx + dy * dy >= db2:
+        if q >= 0:
+            i = q - bbase
+            if i < blo or i >= bhi:
+                if town0 <= j < town1 and reach[0] < 0:
+                    reach[0] = j + tbase
+                continue
+            dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
+            if dx * dx + dy * dy < db2:
+                taken[i] = 1
+                continue
             partner[j] = -1
             if town0 <= j < town1:
                 counters[BREAKS] += 1
-    for i in range(blo, bhi):
-        taken[i] = 0
-    for j in range(tlo, thi):
-        i = partner[j] - bbase
-        if partner[j] >= 0 and blo <= i < bhi:
-            taken[i] = 1
-    for j in range(tlo, thi):
-        claim[j] = -1
-        if partner[j] >= 0:
-            continue
+        claim[nfree] = j
+        nfree += 1
+    # 2. Claims of the free sites, kept in their slot m of ``claim`` (their site is claim_site[m]).
+    for m in range(nfree):
+        j = claim[m]
         gl = j + tbase
         qc = np.int64(np.floor(like(gl, d0) + tx[j] + 0.5))    # nearest substrate column
         best = np.inf
+        got = -1
         for q in range(qc - w, qc + w + 1):
             if q < 0 or q >= bcols:
                 continue
@@ -101,42 +111,35 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach):
             d2 = dx * dx + dy * dy
             if d2 <= d02 and d2 < best:
                 best = d2
-                claim[j] = i
+                got = i
+        claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j        # site and claim in one integer
+    # 3. Grants in increasing site order (the free list is in site order).
     zero_x0 = p[P_REFORM_ZERO] != 0
-    for j in range(tlo, thi):
-        i = claim[j]
-        if i < 0 or taken[i]:
+    for m in range(nfree):
+        c = claim[m]
+        if c < 0:
+            continue
+        i, j = c // (thi + 1), c % (thi + 1)
+        if taken[i]:
             continue
         taken[i] = 1
         partner[j] = i + bbase
         if zero_x0:
-            x0[j] = like(0, d0)
+            x0[j] = zero
         else:
             x0[j] = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)[0]
         if town0 <= j < town1:
             counters[FORMS] += 1
-
-
-@njit(cache=True)
-def forces(tx, ty, bx, by, partner, x0, g, p, ext_x, ext_y, exb_x, exb_y):
-    """Interface bond forces at u(t): on OWNED top nodes into (ext_x, ext_y), on OWNED bottom nodes into
-    (exb_x, exb_y), both indexed by local column; zero where there is no bond."""
-    tbase, tlo, thi, town0, town1 = g[G_TBASE], g[G_TLO], g[G_THI], g[G_TOWN0], g[G_TOWN1]
-    bbase, blo, bhi, bown0, bown1 = g[G_BBASE], g[G_BLO], g[G_BHI], g[G_BOWN0], g[G_BOWN1]
-    d0, kx, ky = p[P_DELTA0], p[P_KX], p[P_KY]
-    zero = like(0, d0)
-    for j in range(town0, town1):
-        ext_x[j] = zero
-        ext_y[j] = zero
-    for i in range(bown0, bown1):
-        exb_x[i] = zero
-        exb_y[i] = zero
+    # Forces of the bonds at u(t).
     for j in range(tlo, thi):
         q = partner[j]
         i = q - bbase
-        if q < 0 or i < blo or i >= bhi:
-            continue
         top_own = town0 <= j < town1
+        if q < 0 or i < blo or i >= bhi:
+            if top_own:
+                ext_x[j] = zero
+                ext_y[j] = zero
+            continue
         bot_own = bown0 <= i < bown1
         if not (top_own or bot_own):
             continue
@@ -151,7 +154,7 @@ def forces(tx, ty, bx, by, partner, x0, g, p, ext_x, ext_y, exb_x, exb_y):
             exb_y[i] = -fy
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def coverage(tx, bx, g):
     """True when this rank's interface copies reach far enough in the current positions (``layout.Reach``).
 
@@ -187,7 +190,7 @@ def coverage(tx, bx, g):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def record(tx, ty, bx, by, partner, x0, g, p, k, f_intact, f_partner, f_ux, f_uy, f_sxy, f_syy):
     """Frame k of the interface record for the OWNED top sites: intact, partner, u/l, and the traction
     sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho c_r^2), syy = k_y (y_ij - delta0)/(a rho c_r^2)."""
