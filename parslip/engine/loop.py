@@ -82,7 +82,7 @@ def _flag(flags, bit, step, block, row, col, value):
     flags[L_BITS] |= bit
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath={'contract'})
 def _rows(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, zeros, drive0, drive_on, shift, gy):
     """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN)."""
     cf = sp[S_CF]
@@ -103,7 +103,7 @@ def _rows(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, zeros, drive0, drive_on,
                 px[r, j] = drive0[r, j] + shift
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath={'contract'})
 def _nodes(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, drive0, drive_on, shift, gy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
     cf = sp[S_CF]

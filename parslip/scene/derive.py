@@ -69,6 +69,20 @@ class Setup:
         return t_internal / self.t_unit
 
 
+def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float, str]:
+    """``model.stability.omega_max``, kept on disk between runs (``io.cache``)."""
+    from ..io import cache
+    b, t = lat.blocks
+    k = cache.key(top=[t.rows, t.cols], bottom=[b.rows, b.cols], substrate=lat.substrate,
+                  kn=[float(v) for v in kn], kt=[float(v) for v in kt], kx=float(kx), ky=float(ky))
+    hit = cache.lookup(k)
+    if hit is not None:
+        return hit
+    value = _omega_max(lat, kn, kt, kx, ky)
+    cache.store(k, value)
+    return value
+
+
 def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt."""
     mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
@@ -76,8 +90,8 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     if omega is None:
-        omega, method = _omega_max(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                           scene["interface.kx"], scene["interface.ky"])
+        omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
+                                         scene["interface.kx"], scene["interface.ky"])
     else:
         omega, method = omega
     limit = _dt_max(omega)

@@ -48,7 +48,7 @@ R_, UR_, UL_, L_, DL_, DR_ = 1, 2, 4, 8, 16, 32
 K_N, K_T, K_A, K_B, K_C, K_DAMP = range(6)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def row_full(cx, cy, px, py, r, j0, n, s, K, blk, damped):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py."""
     kn, kt, a, b, c, bb = K[blk, 0], K[blk, 1], K[blk, 2], K[blk, 3], K[blk, 4], K[blk, 5]
@@ -81,7 +81,7 @@ def row_full(cx, cy, px, py, r, j0, n, s, K, blk, damped):
             oy[k] = uy + ((uy - oy[k]) + fy)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def row_edge(cx, cy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy):
     """Row segment of a block's top row (``up`` False: no up bonds) or bottom row (``up`` True: no down bonds).
 
@@ -115,7 +115,7 @@ def row_edge(cx, cy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy
         oy[k] = uy + (damp * (uy - oy[k]) + fy)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def node_masked(cx, cy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy):
     """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
 

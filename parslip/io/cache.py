@@ -1,0 +1,64 @@
+"""Results worth keeping between runs: omega_max of a lattice, on disk.
+
+The highest eigenfrequency of a lattice (``model.stability.omega_max``)
+takes about a second of Lanczos iterations for the paper's scenes and a
+minute for the largest lattices it serves exactly; it depends only on the
+geometry and the stiffnesses.  It is kept in a JSON file under
+``$PARSLIP_CACHE_DIR`` (default ``$XDG_CACHE_HOME/parslip``, else
+``~/.cache/parslip``), keyed by those inputs, so a sweep or a rerun starts at
+once.  The value stored is the value computed, so a cached run is the same
+run.  Only the process that derives the scene (rank 0) reads or writes it;
+an unwritable cache is skipped silently.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+
+VERSION = 1
+
+
+def cache_dir() -> str:
+    d = os.environ.get("PARSLIP_CACHE_DIR")
+    if d:
+        return d
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "parslip")
+
+
+def _path() -> str:
+    return os.path.join(cache_dir(), "omega_max.json")
+
+
+def key(**inputs) -> str:
+    return hashlib.sha256(json.dumps([VERSION, inputs], sort_keys=True).encode()).hexdigest()[:32]
+
+
+def lookup(k: str):
+    try:
+        with open(_path()) as f:
+            entry = json.load(f).get(k)
+        return (float(entry[0]), str(entry[1])) if entry else None
+    except (OSError, ValueError, TypeError, IndexError):
+        return None
+
+
+def store(k: str, value: tuple[float, str]) -> None:
+    """Add one entry; written to a temporary file and renamed, so a reader never sees half a file."""
+    path = _path()
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        try:
+            with open(path) as f:
+                table = json.load(f)
+        except (OSError, ValueError):
+            table = {}
+        table[k] = [repr(float(value[0])), value[1]]
+        fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".omega-", suffix=".json")
+        with os.fdopen(fd, "w") as f:
+            json.dump(table, f)
+        os.replace(tmp, path)
+    except OSError:
+        pass
