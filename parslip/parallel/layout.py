@@ -59,6 +59,8 @@ TASK_FIELDS = ("block", "row", "j0", "n", "kind", "mask", "extra", "load", "driv
 TASK_WIDTH = len(TASK_FIELDS)
 # Neighbour slots (bit k of a mask): 0 right, 1 up-right, 2 up-left, 3 left, 4 down-left, 5 down-right.
 ALL_BONDS = 0b111111
+# Row segments up to this many nodes run node by node (a vectorised loop's set-up costs more).
+SHORT = 4
 
 # Measured cost of one column, in node updates (benchmarks/bench_loop.py):
 # a bulk node costs 1; each interface site adds the bond update and the
@@ -272,7 +274,9 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
 
     Interior columns of a row run in one vectorised loop of its kind (FULL,
     NO_UP, NO_DOWN); the first and last column of a block, where bonds are
-    missing, run as MASKED single nodes.  A task is ``early`` when a peer
+    missing, and segments of at most SHORT nodes run as MASKED single nodes.
+    Both kernels form the same differences and sums in the same order, so a
+    node gets the same bits whichever runs it, and the cut does not matter.  A task is ``early`` when a peer
     keeps some of its nodes as HALO: the loop runs early tasks first, sends,
     and runs the rest while the messages travel.
     """
@@ -319,15 +323,12 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
             for c_lo, c_hi in zip(cuts[:-1], cuts[1:]):
                 if c_hi <= c_lo:
                     continue
-                edge = c_lo == bc0 or c_hi - 1 == bc1 - 1
-                if kind == MASKED or edge:
+                if kind == MASKED or c_hi - c_lo <= SHORT:
+                    # Block edges, and segments too short to pay for a vectorised loop: node by node.
+                    # With every bond of its row present, the single-node kernel gives the same bits.
                     for c in range(c_lo, c_hi):
-                        if kind == MASKED or c == bc0 or c == bc1 - 1:
-                            rows.append((b, blk.prow(r), blk.j(c), 1, MASKED, _mask(blk, r, c), extra, load,
-                                         col_drive(c), early(c, c + 1), blk.shift(r)))
-                        else:
-                            rows.append((b, blk.prow(r), blk.j(c), 1, kind, ALL_BONDS, extra, load, row_drive,
-                                         early(c, c + 1), blk.shift(r)))
+                        rows.append((b, blk.prow(r), blk.j(c), 1, MASKED, _mask(blk, r, c), extra, load,
+                                     col_drive(c), early(c, c + 1), blk.shift(r)))
                 else:
                     rows.append((b, blk.prow(r), blk.j(c_lo), c_hi - c_lo, kind, ALL_BONDS, extra, load,
                                  row_drive, early(c_lo, c_hi), blk.shift(r)))
