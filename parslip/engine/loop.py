@@ -42,9 +42,8 @@ Iface = namedtuple("Iface", "partner x0 claim taken ext_x ext_y exb_x exb_y zero
 Frames = namedtuple("Frames", "intact partner ux uy sxy syy step cursor")
 
 # Integer parameters ``ip``.
-(I_NRAMP, I_NDS, I_DRIVE, I_FRAME_EVERY, I_NFRAMES, I_CHECK, I_HAS_IFACE, I_RIGID, I_BROW, I_NEARLY,
- I_PAR_B, I_PAR_T) = range(12)
-I_SIZE = 12
+(I_NRAMP, I_NDS, I_DRIVE, I_FRAME_EVERY, I_NFRAMES, I_CHECK, I_HAS_IFACE, I_RIGID, I_BROW, I_FOFF) = range(10)
+I_SIZE = 10
 # Float parameters ``fp`` (float64).
 F_DT, F_V0, F_FEXT, F_JUMP = range(4)
 F_SIZE = 4
@@ -237,7 +236,7 @@ def _record(n, lv, ip, iface, frames, tm):
     if k < 0 or k % fe != 0 or k // fe >= ip[I_NFRAMES]:
         return True
     t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
-    k //= fe
+    k = k // fe + ip[I_FOFF]               # the frame's index in the file (a restart may change the cadence)
     cur = frames.cursor
     if k <= cur[C_LAST]:
         return True

@@ -47,12 +47,10 @@ class Simulation:
         zeta = sc["time.zeta"]
         c = 0.5 * zeta * st.dt
         lat = st.lattice
-        n_early = int(self.tasks[:, 9].sum()) if len(self.tasks) else 0
         self.ip = np.zeros(L.I_SIZE, np.int64)
         self.ip[:] = [st.n_ramp, st.n_drive_start, int(sc["drive.mode"] != "none"), st.frame_every, st.n_frames,
                       CHECK_EVERY, int(lat.has_interface), int(lat.rigid),
-                      self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1), n_early, self.layout.blocks[0].parity,
-                      self.layout.blocks[1].parity]
+                      self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1), 0]
         fext = -sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0
         self.fp = np.array([st.dt, st.v0, fext, RUNAWAY_JUMP], np.float64)
         self.sp = np.array([st.dt * st.dt / (1.0 + c), float(zeta > 0)], self.dtype)
@@ -70,6 +68,9 @@ class Simulation:
         self.n = 0
         self._snap = {st.n_drive_start + k: j for j, k in enumerate(st.snapshot_steps)}
         self._snap_done = set()
+        self.snapshots_total = len(self._snap)
+        self.snapshots_written = 0
+        self.last_frame_step = -1
 
     # ---------------------------------------------------------------- steps --
     @property
@@ -140,20 +141,121 @@ class Simulation:
         self._flush(writer)
 
     # --------------------------------------------------------------- output --
+    @property
+    def frames_total(self) -> int:
+        """Interface frames in the output file once this run ends (earlier runs' frames included)."""
+        return int(self.ip[L.I_FOFF]) + self.setup.n_frames
+
+    @property
+    def frames_written(self) -> int:
+        return int(self.frames.cursor[L.C_BASE])
+
+    def frame_time(self, steps: np.ndarray) -> np.ndarray:
+        """Times (l/c_r from the drive start) of frames recorded at these steps."""
+        st = self.setup
+        return st.to_lcr((np.asarray(steps) - st.n_drive_start) * st.dt)
+
     def _flush(self, writer):
         fr = self.frames
         count = int(fr.cursor[L.C_COUNT])
+        if count:
+            self.last_frame_step = int(fr.step[count - 1])
         if writer is not None and count:
             base = int(fr.cursor[L.C_BASE])
-            writer.interface_frames(base, count, fr)
+            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]))
         fr.cursor[L.C_BASE] += count
         fr.cursor[L.C_COUNT] = 0
+
+    def flush(self, writer):
+        """Write the frames held in memory (before a checkpoint or a stop)."""
+        self._flush(writer)
+
+    # ----------------------------------------------------------- checkpoints --
+    def checkpoint_parts(self) -> dict:
+        """This rank's share of a checkpoint (``io.checkpoint``), by global id: node and site arrays."""
+        s = self.state
+        lat = self.setup.lattice
+        d0 = np.zeros(s.n_owned, s.dtype)
+        top = s.own_block == TOP
+        d0[top] = s.drive0[s.own_prow[top], s.own_j[top]]
+        lvl = self.state.level
+        parts = {"gid": s.gid, "u": self._owned(lvl(self.n)), "u_prev": self._owned(lvl(self.n - 1)), "drive0": d0}
+        if lat.has_interface:
+            sl = s.owned_sites()
+            parts.update(site=np.arange(sl.stop - sl.start) + s.site0(), partner=s.iface.partner[sl].copy(),
+                         x0=s.iface.x0[sl].copy())
+        else:
+            parts.update(site=np.zeros(0, np.int64), partner=np.zeros(0, np.int64), x0=np.zeros(0, s.dtype))
+        return parts
+
+    def _owned(self, level) -> np.ndarray:
+        """OWNED (n_owned, 2) of one level, in the state's float type (bitwise)."""
+        s = self.state
+        bx, by, tx, ty = level
+        out = np.zeros((s.n_owned, 2), s.dtype)
+        for b, (ax, ay) in ((0, (bx, by)), (1, (tx, ty))):
+            m = s.own_block == b
+            out[m, 0] = ax[s.own_prow[m], s.own_j[m]]
+            out[m, 1] = ay[s.own_prow[m], s.own_j[m]]
+        return out
+
+    def restore(self, arrays: dict, attrs: dict):
+        """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
+
+        Every rank takes its OWNED part by global id, then one halo exchange fills the HALO copies."""
+        from ..parallel.exchange import COMPLETE, POST, exchange
+        s, st = self.state, self.setup
+        self.n = n = int(attrs["step"])
+        for level, name in ((n, "u"), (n - 1, "u_prev")):
+            bx, by, tx, ty = s.level(level)
+            u = arrays[name][s.gid]
+            for b, (ax, ay) in ((0, (bx, by)), (1, (tx, ty))):
+                m = s.own_block == b
+                ax[s.own_prow[m], s.own_j[m]] = u[m, 0]
+                ay[s.own_prow[m], s.own_j[m]] = u[m, 1]
+        top = s.own_block == TOP
+        s.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
+        if st.lattice.has_interface:
+            sl = s.owned_sites()
+            sites = np.arange(sl.stop - sl.start) + s.site0()
+            s.iface.partner[sl] = arrays["partner"][sites]
+            s.iface.x0[sl] = arrays["x0"][sites]
+        bx, by, tx, ty = s.level(n)
+        for phase in (POST, COMPLETE):
+            exchange(phase, self.plan, bx, by, tx, ty, s.iface.partner, s.iface.x0, self.flags)
+        if self.rank == 0:
+            s.iface.counters[:] = [int(v) for v in attrs["counters"]]
+        # The output carries on after what the checkpointed run wrote, at this scene's cadence.
+        written = int(attrs["frames_written"])
+        self.last_frame_step = last = int(attrs["last_frame_step"])
+        fe, nds = st.frame_every, st.n_drive_start
+        k_first = 0 if last < nds else (last - nds) // fe + 1
+        self.ip[L.I_FOFF] = written - k_first
+        self.frames.cursor[:] = [written, 0, written - 1]
+        snaps = int(attrs["snapshots_written"])
+        later = sorted(k for k in self._snap if k > n)
+        self._snap = {k: snaps + m for m, k in enumerate(later)}
+        self.snapshots_total = snaps + len(later)
+        self.snapshots_written = snaps
+
+    def checkpoint_attrs(self) -> dict:
+        """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""
+        st = self.setup
+        counters = self.counters.copy()
+        if self.comm is not None:
+            counters = self.comm.allreduce(counters)
+        return {"step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
+                "frames_written": self.frames_written, "last_frame_step": self.last_frame_step,
+                "snapshots_written": self.snapshots_written, "counters": counters,
+                "omega_max": st.omega_max, "omega_method": st.omega_method, "dt": st.dt, "n_ranks": self.size,
+                "precision": self.dtype.name}
 
     def _snapshot(self, writer):
         j = self._snap.get(self.n)
         if j is None or self.n in self._snap_done:
             return
         self._snap_done.add(self.n)
+        self.snapshots_written = j + 1
         if writer is None:
             return
         st = self.setup

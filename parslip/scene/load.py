@@ -71,6 +71,11 @@ def load_scene_file(path: str) -> dict[str, Any]:
         raise ConfigError(f"scene {path!r}: not UTF-8 text; accepted: a TOML scene file") from None
 
 
+def load_scene_text(text: str) -> dict[str, Any]:
+    """A scene stored as TOML text (output files and checkpoints keep the resolved scene), flattened."""
+    return _flatten(tomllib.loads(text))
+
+
 def resolve(raw: dict[str, Any], overrides: list[tuple[str, Any]] = ()) -> dict[str, Any]:
     """Defaults, then the scene, then overrides; every value checked."""
     flat = dict(raw)

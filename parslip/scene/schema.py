@@ -99,6 +99,11 @@ SCHEMA: dict[str, Key] = {
     "output.snapshots": Key(20, int, "-", ">= 0", _range(0), "whole-lattice snapshots over the drive, plus one at its start"),
     "output.progress_s": Key(10.0, float, "s", "> 0", _range(0.0, lo_open=True),
                              "wall-clock interval between progress lines"),
+    # checkpoints -------------------------------------------------------------------
+    "checkpoint.every": Key(0.0, float, "l/c_r", ">= 0 (0 = none on a simulated-time cadence)", _range(0.0),
+                            "simulated time between checkpoints (OUT.ckpt.h5, replaced atomically)"),
+    "checkpoint.wall": Key(0.0, float, "s", ">= 0 (0 = none on a wall-clock cadence)", _range(0.0),
+                           "wall-clock time between checkpoints"),
 }
 
 SECTIONS = sorted({k.split(".")[0] for k in SCHEMA})

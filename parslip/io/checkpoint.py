@@ -1,0 +1,123 @@
+"""Checkpoints: everything a run needs to continue exactly, written atomically, checked before use.
+
+A checkpoint is one HDF5 file holding, by global id (so any rank count can
+read it back):
+
+  /u, /u_prev     float [nodes, 2]   displacements u(n) and u(n-1), in a (the state's float type)
+  /drive0         float [nodes]      x displacement of each node when the drive started (driven nodes)
+  /partner, /x0   int64, float [sites]  interface bonds: substrate site bonded to (-1 broken), rest offset x0
+  root attributes  the step n, the resolved scene (TOML), omega_max and dt, the output cursor (frames and
+                   snapshots written), the bond event counters, the run id shared with the output file,
+                   the rank count that wrote it, and ``complete`` = 1, set last.
+
+Writing: rank 0 gathers and writes ``PATH.tmp``, flushes and fsyncs it, then
+renames it over ``PATH``: a process killed at any moment leaves the previous
+checkpoint whole.  Reading: ``validate`` refuses, with one line naming what
+is wrong (exit 2), a file that is not a complete parslip checkpoint, or one
+from another scene, except for the keys ``SAFE_KEYS`` that may change on a
+restart (duration, output cadence, progress, checkpoint cadence).
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..errors import ConfigError
+
+FORMAT = "parslip checkpoint 1"
+SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
+             "checkpoint.every", "checkpoint.wall", "interface.slip_reach")
+DATASETS = ("u", "u_prev", "drive0", "partner", "x0")
+
+
+def path_for(out: str) -> str:
+    """The checkpoint that belongs to output file ``out``: OUT.ckpt.h5."""
+    return out + ".ckpt.h5"
+
+
+def write(path: str, parts: dict, attrs: dict) -> None:
+    """Write a checkpoint (rank 0 only): ``parts`` are whole arrays in global order."""
+    import h5py
+    tmp = path + ".tmp"
+    with h5py.File(tmp, "w") as f:
+        for name in DATASETS:
+            f.create_dataset(name, data=parts[name])
+        for k, v in attrs.items():
+            f.attrs[k] = v
+        f.attrs["format"] = FORMAT
+        f.flush()
+        f.attrs["complete"] = 1
+    fd = os.open(tmp, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+    os.replace(tmp, path)
+    try:                                  # the rename itself survives a crash once the folder is synced
+        dfd = os.open(os.path.dirname(os.path.abspath(path)), os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    except OSError:
+        pass
+
+
+def read(path: str) -> tuple[dict, dict]:
+    """(arrays, attributes) of a checkpoint that ``validate`` accepted."""
+    import h5py
+    with h5py.File(path, "r") as f:
+        return {name: f[name][...] for name in DATASETS}, dict(f.attrs)
+
+
+def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
+    """Check a checkpoint before use; returns its attributes.  Raises ConfigError (exit 2) with one line."""
+    import h5py
+
+    from ..scene.load import load_scene_text
+    if not os.path.isfile(path):
+        raise ConfigError(f"--restart {path!r}: no such file; accepted: a checkpoint written by parslip run "
+                          f"(OUT.ckpt.h5)")
+    try:
+        with h5py.File(path, "r") as f:
+            attrs = dict(f.attrs)
+            shapes = {name: f[name].shape for name in DATASETS if name in f}
+    except OSError as e:
+        raise ConfigError(f"--restart {path!r}: not a readable HDF5 file ({e.__class__.__name__}); accepted: a "
+                          f"checkpoint written by parslip run") from None
+    if attrs.get("format") != FORMAT:
+        raise ConfigError(f"--restart {path!r}: not a parslip checkpoint; accepted: a file written by parslip run "
+                          f"as OUT.ckpt.h5")
+    if int(attrs.get("complete", 0)) != 1:
+        raise ConfigError(f"--restart {path!r}: incomplete checkpoint (the writer stopped before finishing); "
+                          f"accepted: a complete checkpoint")
+    want = {"u": (n_nodes, 2), "u_prev": (n_nodes, 2), "drive0": (n_nodes,), "partner": (n_sites,),
+            "x0": (n_sites,)}
+    for name, shape in want.items():
+        if shapes.get(name) != shape:
+            raise ConfigError(f"--restart {path!r}: dataset /{name} has shape {shapes.get(name)}, this scene needs "
+                              f"{shape}; accepted: a checkpoint of the same lattice")
+    saved = load_scene_text(str(attrs["scene"]))
+    for key in sorted(set(saved) | set(scene)):
+        if key in SAFE_KEYS:
+            continue
+        if saved.get(key) != scene.get(key):
+            raise ConfigError(f"--restart {path!r}: {key} = {scene.get(key)!r} but the checkpoint was written with "
+                              f"{saved.get(key)!r}; accepted: the same scene, except {', '.join(SAFE_KEYS)}")
+    return attrs
+
+
+def gather_global(comm, gid: np.ndarray, values: np.ndarray, total: int) -> np.ndarray | None:
+    """Values held by global id on every rank, assembled on rank 0 (None elsewhere)."""
+    if comm is None:
+        out = np.zeros((total,) + values.shape[1:], values.dtype)
+        out[gid] = values
+        return out
+    parts = comm.gather((gid, values), root=0)
+    if comm.Get_rank() != 0:
+        return None
+    out = np.zeros((total,) + values.shape[1:], values.dtype)
+    for g, v in parts:
+        out[g] = v
+    return out
