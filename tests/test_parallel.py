@@ -1,25 +1,21 @@
 """Parallel runs against serial runs, compared by global node id.
 
-The in-process tests run under mpi-pytest on 2 ranks; the rank-count test
-launches the real command line under mpiexec on 1, 2 and 3 ranks (3 is
-oversubscribed on a 2-core machine) and compares the output files bit for bit.
+The in-process tests run under mpi-pytest on 2 ranks; the rank-count tests
+launch the real command line on 1, 2 and 3 ranks (3 is oversubscribed on a
+2-core machine) through both writers, and compare the output files bit for
+bit: rank against rank, and HDF5's collective mpio driver (the venv that
+tests/install.sh builds, under Debian's mpiexec.mpich) against rank 0
+gathering (PyPI's serial h5py, under the mpich wheel's mpiexec).
 """
-import os
-import shutil
-import subprocess
-import sys
-
 import h5py
 import numpy as np
 import pytest
 
-from helpers import SMALL, scene, small_toml
+from helpers import SMALL, WRITERS, datasets, require, run_cli, scene, small_toml
 from parslip.parallel.decomposition import LEFT, RIGHT, SlabExchanger, build_layout, partition, bottom_site_reach
 from parslip.engine.simulation import Simulation
 from parslip.scene.derive import derive
 from parslip.model.lattice import Lattice
-
-MPIEXEC = shutil.which("mpiexec")
 
 
 @pytest.mark.parallel(nprocs=2)
@@ -81,61 +77,77 @@ def test_parallel_state_matches_serial_by_global_id():
 
 
 
-def _mpirun(n, scene_file, out):
-    """The real command line on n ranks; returns the finished process."""
-    return subprocess.run([MPIEXEC, "-n", str(n), sys.executable, "-m", "parslip", "run", str(scene_file),
-                           "--out", str(out), "--no-png", "--quiet"], capture_output=True, text=True, timeout=300)
+# SMALL with a short settle and a faster drive: 926 steps in which bonds still
+# break and re-form across slab boundaries.  Short because Debian's MPICH (the
+# mpio venv's) spins while it waits: on 3 ranks over 2 cores each halo exchange
+# then costs a scheduler time slice, about 4 ms against 0.04 ms for the wheel.
+QUICK = {"load.ramp": 0.2, "load.settle": 0.5, "drive.v0": 0.05, "drive.duration": 2.0}
 
 
-def _datasets(path):
-    out = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda name, obj: out.__setitem__(name, obj[...]) if isinstance(obj, h5py.Dataset) else None)
-        attrs = dict(f.attrs)
-    return out, attrs
+class SmallRuns:
+    """SMALL + QUICK on 1, 2 and 3 ranks through each writer, each run once per module and only when asked."""
+
+    def __init__(self, tmp):
+        self.tmp = tmp
+        self.scene = tmp / "small.toml"
+        self.scene.write_text(small_toml(**QUICK))
+        self.files = {}
+
+    def get(self, writer, n):
+        """(datasets, root attributes, stderr) of the run on n ranks with that writer."""
+        if (writer, n) not in self.files:
+            out = self.tmp / f"{writer}{n}.vtkhdf"
+            p = run_cli(n, "run", self.scene, "--out", out, "--no-png", "--quiet", writer=writer)
+            assert p.returncode == 0, p.stderr
+            self.files[writer, n] = (*datasets(out), p.stderr)
+        return self.files[writer, n]
 
 
-@pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
-def test_output_bitwise_identical_with_ranks_that_hold_no_interface(tmp_path):
+@pytest.fixture(scope="module")
+def small_runs(tmp_path_factory):
+    return SmallRuns(tmp_path_factory.mktemp("small_runs"))
+
+
+def assert_same_datasets(got, ref, what):
+    assert got.keys() == ref.keys(), what
+    for name in ref:
+        assert got[name].dtype == ref[name].dtype and got[name].shape == ref[name].shape, (what, name)
+        assert got[name].tobytes() == ref[name].tobytes(), (what, name)
+
+
+@pytest.mark.parametrize("writer", WRITERS)
+def test_output_bitwise_identical_with_ranks_that_hold_no_interface(tmp_path, writer):
     """The substrate overhangs the block 2:1 on each side, so on 3 ranks the outer
-    slabs hold no top node: they must still take part in every exchange."""
-    over = {"lattice.top_cols": 12, "lattice.bottom_cols": 100, "drive.v0": 0.02, "drive.duration": 4.0}
+    slabs hold no top node: they must still take part in every exchange and every write."""
+    require(writer)
+    over = {"lattice.top_cols": 12, "lattice.bottom_cols": 100, "drive.v0": 0.02, "drive.duration": 4.0,
+            "load.ramp": 0.2, "load.settle": 0.5}
     sc = tmp_path / "overhang.toml"
     sc.write_text(small_toml(**over))
-    from parslip.scene.derive import derive as _derive
-    st = _derive(scene(**{**SMALL, **over}))
+    st = derive(scene(**{**SMALL, **over}))
     bounds = partition(st.lattice.col_count, 3, max(bottom_site_reach(st.slip_reach), 4))
     # Not even a halo copy of a top node on the outer ranks (the top row's halo reaches 4 columns).
     assert bounds[1] <= st.lattice.top.col0 - 4 and bounds[2] >= st.lattice.top.col0 + 12 + 4
     files = {}
     for n in (1, 3):
         out = tmp_path / f"o{n}.vtkhdf"
-        p = _mpirun(n, sc, out)
+        p = run_cli(n, "run", sc, "--out", out, "--no-png", "--quiet", writer=writer)
         assert p.returncode == 0, p.stderr
-        files[n] = _datasets(out)[0]
+        files[n] = datasets(out)[0]
     assert (files[1]["interface/intact"] == 0).any()
-    for name, ref in files[1].items():
-        assert files[3][name].tobytes() == ref.tobytes(), name
+    assert_same_datasets(files[3], files[1], f"{writer} on 3 ranks")
 
 
-@pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
-def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
-    sc = tmp_path / "small.toml"
-    sc.write_text(small_toml())
-    files = {}
-    for n in (1, 2, 3):
-        out = tmp_path / f"r{n}.vtkhdf"
-        p = _mpirun(n, sc, out)
-        assert p.returncode == 0, p.stderr
-        files[n] = _datasets(out)
-    ref, ref_attrs = files[1]
+@pytest.mark.parametrize("writer", WRITERS)
+def test_output_bitwise_identical_on_1_2_3_ranks(small_runs, writer):
+    require(writer)
+    ref, ref_attrs, _ = small_runs.get(writer, 1)
     assert ref_attrs["status"] == "complete"
-    for n in (2, 3):
-        data, attrs = files[n]
-        assert attrs["n_ranks"] == n
-        assert data.keys() == ref.keys()
-        for name in ref:
-            assert data[name].dtype == ref[name].dtype and data[name].tobytes() == ref[name].tobytes(), name
+    for n in (1, 2, 3):
+        data, attrs, log = small_runs.get(writer, n)
+        assert attrs["n_ranks"] == n and attrs["hdf5_mode"] == writer
+        assert f"writer: {writer} (" in log
+        assert_same_datasets(data, ref, f"{writer} on {n} ranks")
 
     # The test must exercise the hard case: a bond that broke and re-formed
     # with its top node and its new bottom partner on different ranks.
@@ -143,7 +155,7 @@ def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
     intact, partner = ref["interface/intact"], ref["interface/partner"]
     crossed = {}
     for n in (2, 3):
-        reach = max(bottom_site_reach(0.02 * 6.0 * 24 + 2.0), 4)
+        reach = max(bottom_site_reach(QUICK["drive.v0"] * QUICK["drive.duration"] * 24 + 2.0), 4)
         bounds = partition(lat.col_count, n, reach)
         owner = lambda col: np.searchsorted(bounds, col, side="right") - 1   # noqa: E731
         top_owner = owner(lat.top.col0 + np.arange(lat.top.cols))
@@ -154,30 +166,28 @@ def test_output_bitwise_identical_on_1_2_3_ranks(tmp_path):
     assert crossed[2] > 0 and crossed[3] > 0, crossed
 
 
-@pytest.mark.skipif(MPIEXEC is None or not h5py.get_config().mpi,
-                    reason="needs an MPI-enabled h5py (parallel HDF5); PyPI's h5py is serial")
-def test_collective_mpio_output_matches_serial(tmp_path):
-    """With parallel HDF5 every rank writes its own slices through the mpio driver."""
-    sc = tmp_path / "small.toml"
-    sc.write_text(small_toml())
-    files = {}
-    for n in (1, 2):
-        out = tmp_path / f"r{n}.vtkhdf"
-        p = _mpirun(n, sc, out)
-        assert p.returncode == 0, p.stderr
-        files[n] = _datasets(out)
-    assert files[2][1]["hdf5_mode"] == "mpio"
-    for name, ref in files[1][0].items():
-        assert files[2][0][name].tobytes() == ref.tobytes(), name
+@pytest.mark.parametrize("n", (1, 2, 3))
+def test_collective_mpio_and_gathered_files_are_identical(small_runs, n):
+    """Every rank writing its slices through HDF5's mpio driver gives, byte for byte, the
+    datasets rank 0 writes after gathering; only hdf5_mode (and the run's own command line
+    and clock) tell the files apart."""
+    require("gather")
+    require("mpio")
+    (mpio, mpio_attrs, _), (gather, gather_attrs, _) = small_runs.get("mpio", n), small_runs.get("gather", n)
+    assert (mpio_attrs["hdf5_mode"], gather_attrs["hdf5_mode"]) == ("mpio", "gather")
+    assert_same_datasets(mpio, gather, f"mpio vs gather on {n} ranks")
+    own = {"hdf5_mode", "command", "created_utc"}
+    assert mpio_attrs.keys() == gather_attrs.keys()
+    for k in mpio_attrs.keys() - own:
+        assert np.array_equal(mpio_attrs[k], gather_attrs[k]), k
 
 
-@pytest.mark.skipif(MPIEXEC is None, reason="needs mpiexec")
 def test_slip_beyond_the_halo_stops_the_run(tmp_path):
     """A slab's halo reaches interface.slip_reach + 6 columns; sliding further is refused, not wrong."""
     sc = tmp_path / "small.toml"
     sc.write_text(small_toml(**{"interface.slip_reach": 0.2}))
     out = tmp_path / "o.vtkhdf"
-    p = _mpirun(2, sc, out)
+    p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet")
     assert p.returncode == 3, p.stderr
     assert "interface.slip_reach" in p.stderr and "Traceback" not in p.stderr
     with h5py.File(out, "r") as f:
