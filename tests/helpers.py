@@ -93,14 +93,19 @@ def mpio_missing() -> str | None:
     return None if p.returncode == 0 else f"h5py in {MPIO_VENV} has no MPI: {p.stderr.strip()[-200:]}"
 
 
+def unavailable(what: str) -> None:
+    """Skip a test that needs what tests/install.sh provides; in CI, where it has run, fail instead."""
+    msg = f"{what}; run `bash tests/install.sh`"
+    if os.environ.get("CI") == "true":
+        pytest.fail(msg)
+    pytest.skip(msg)
+
+
 def require(writer: str) -> None:
-    """Skip a test whose writer cannot run here; in CI, where tests/install.sh builds it, fail instead."""
+    """Skip (or, in CI, fail) a test whose writer cannot run here."""
     why = mpio_missing() if writer == "mpio" else (None if WHEEL_MPIEXEC else "no mpiexec (the mpich wheel)")
     if why:
-        msg = f"{writer} writer unavailable: {why}; run `bash tests/install.sh`"
-        if os.environ.get("CI") == "true":
-            pytest.fail(msg)
-        pytest.skip(msg)
+        unavailable(f"{writer} writer unavailable: {why}")
 
 
 def cli_command(n: int, *args, writer: str = "gather") -> list[str]:

@@ -14,11 +14,10 @@ import sys
 
 import pytest
 
-from helpers import MPIO_MPIEXEC, MPIO_PYTHON, WHEEL_MPIEXEC, cli_env, require, small_toml
+from helpers import MPIO_MPIEXEC, MPIO_PYTHON, WHEEL_MPIEXEC, cli_env, require, small_toml, unavailable
 from parslip.parallel.launcher import detect_launcher, refusal
 
 OMPI_MPIRUN = shutil.which("mpirun.openmpi")
-needs_openmpi = pytest.mark.skipif(OMPI_MPIRUN is None, reason="needs Debian's openmpi-bin (tests/install.sh)")
 WHEEL_MPICH = "MPICH Version:      5.0.2\nMPICH Custom Information:\thttps://pypi.org/p/mpich/5.0.2/\n"
 SITE_MPICH = "MPICH Version:\t4.1.2\nMPICH Device:\tch4:ofi\n"
 OPENMPI = "Open MPI v4.1.4, package: Debian OpenMPI, ident: 4.1.4, repo rev: v4.1.4, May 26, 2022"
@@ -43,11 +42,12 @@ def _refused(p, out, mpiexec, n):
 
 
 def _ompi(n, python, *args):
+    if OMPI_MPIRUN is None:
+        unavailable("no mpirun.openmpi (Debian's openmpi-bin)")
     flags = ["--allow-run-as-root", "--oversubscribe"] if os.geteuid() == 0 else ["--oversubscribe"]
     return [OMPI_MPIRUN, *flags, "-n", str(n), python, "-m", "parslip", *map(str, args)]
 
 
-@needs_openmpi
 def test_open_mpi_mpirun_with_the_mpich_wheel_is_refused(tmp_path, tiny):
     """Unchecked, both ranks abort inside MPI_Init ("unsupported PMI version PMIx", exit 16)."""
     require("gather")
@@ -58,7 +58,6 @@ def test_open_mpi_mpirun_with_the_mpich_wheel_is_refused(tmp_path, tiny):
     assert "Open MPI's mpirun" in line and "OMPI_COMM_WORLD_SIZE=2" in line and "the mpich wheel" in line
 
 
-@needs_openmpi
 def test_open_mpi_mpirun_with_debian_mpich_is_refused(tmp_path, tiny):
     """Unchecked, this pairing starts two one-rank runs that both write the same file."""
     require("mpio")
@@ -69,9 +68,10 @@ def test_open_mpi_mpirun_with_debian_mpich_is_refused(tmp_path, tiny):
     assert "MPICH 4" in line
 
 
-@needs_openmpi
 def test_hydra_with_open_mpi_is_refused_naming_open_mpis_mpiexec(tmp_path, tiny):
     require("gather")
+    if OMPI_MPIRUN is None:
+        unavailable("no Open MPI library (Debian's openmpi-bin)")
     out = tmp_path / "o.vtkhdf"
     cmd = [WHEEL_MPIEXEC, "-n", "2", sys.executable, "-m", "parslip", "run", str(tiny), "--out", str(out)]
     p = subprocess.run(cmd, env=cli_env(MPI4PY_LIBMPI="libmpi.so.40"), capture_output=True, text=True, timeout=120)
