@@ -91,6 +91,13 @@ if os.environ["PROJECT"] == "1":
 EOF
 }
 
+# One build per venv at a time: a second run waits here, then finds the venv working.
+mkdir -p "$WHEEL_CACHE"
+if command -v flock >/dev/null; then
+    exec 9>"$WHEEL_CACHE/.lock-$(printf '%s' "$VENV" | sha256sum | cut -c1-12)"
+    flock 9
+fi
+
 if venv_works; then
     say "$VENV already works (h5py with MPI, $("$VPY" -c 'import h5py; print("h5py", h5py.__version__, "on HDF5", h5py.version.hdf5_version)')); nothing to do"
     exit 0
@@ -157,7 +164,7 @@ build_wheel() {  # name version env...: build once per key, with pip's own cache
         say "$name $version: cached wheel in $WHEELS"
         return
     fi
-    say "building $name $version from source (about a minute)"
+    say "building $name $version from source (1.5 to 2 minutes on 2 cores)"
     local t=$(date +%s)
     env "$@" CFLAGS="$BUILD_CFLAGS" "$VPY" -m pip --disable-pip-version-check -q wheel --no-deps \
         --no-build-isolation --no-cache-dir --no-binary="$name" -w "$WHEELS" "$name==$version" \

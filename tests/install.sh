@@ -12,7 +12,8 @@ cd "$(dirname "$0")/.."
 # Python, so outside CI that case only says how to test this checkout.
 install_project() {
     local where
-    where=$(cd / && python -c 'import os, parslip; print(os.path.dirname(os.path.dirname(os.path.realpath(parslip.__file__))))' 2>/dev/null || true)
+    # Without PYTHONPATH: where the installed parslip points, not this checkout through the path.
+    where=$(cd / && env -u PYTHONPATH python -c 'import os, parslip; print(os.path.dirname(os.path.dirname(os.path.realpath(parslip.__file__))))' 2>/dev/null || true)
     if [ -n "$where" ] && [ "$where" != "$(pwd -P)" ] && [ "${CI:-}" != true ]; then
         echo "tests/install.sh: parslip is installed from $where; leaving it (test this checkout with PYTHONPATH=$PWD)"
         return

@@ -118,8 +118,12 @@ def test_info_and_keys_never_load_mpi(tiny):
     ({"HYDI_CONTROL_FD": "7", "PMI_SIZE": "2", "PMI_RANK": "0"}, SITE_MPICH, False),
     ({"OMPI_COMM_WORLD_SIZE": "2", "SLURM_STEP_ID": "0", "SLURM_PROCID": "0", "PMIX_RANK": "0"}, WHEEL_MPICH, True),
     ({}, OPENMPI, False),
+    # A batch script's own shell is no srun step, whatever its task count.
+    ({"SLURM_STEP_ID": "4294967294", "SLURM_PROCID": "0", "SLURM_NTASKS": "8"}, WHEEL_MPICH, False),
 ])
 def test_only_pairings_known_to_fail_are_refused(env, version, refused):
+    if env.get("SLURM_STEP_ID") == "4294967294":
+        assert detect_launcher(env) is None
     why = refusal(detect_launcher(env), version, "/opt/mpi/bin/mpiexec", argv=["parslip", "run", "s.toml"])
     assert (why is not None) == refused, why
     if refused and "SLURM_STEP_ID" in env and "OMPI_COMM_WORLD_SIZE" not in env:

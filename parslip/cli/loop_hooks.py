@@ -1,4 +1,4 @@
-"""What the command line adds to the time loop: an agreed stop on Ctrl-C, and a test fault.
+"""What the command line adds to the time loop: an agreed stop on Ctrl-C (and SIGTERM/SIGUSR1), and a test fault.
 
 Responsible for two things that ride on the progress callback, which the
 time loop calls on every rank after every step:
@@ -12,6 +12,10 @@ time loop calls on every rank after every step:
   ``every`` steps the ranks agree (one allreduce of an int) and all raise
   KeyboardInterrupt at the same step, and the writer's collective close then
   marks the file ``interrupted at step N``.  A second Ctrl-C interrupts at once.
+  This relies on the time loop calling ``update(n)`` on every rank with the
+  same n, as ``Simulation.run`` does (the Progress object prints on rank 0 only).
+  SIGTERM (Slurm's at the time limit) and SIGUSR1 (which the batch scripts ask
+  for before it) are treated alike while nothing else handles them.
 - **A test fault.**  ``PARSLIP_TEST_FAIL=RANK:STEP`` raises RuntimeError on that
   rank alone when it reaches that step, so tests can check that one failing
   rank takes the whole job down (MPI_Abort) instead of leaving the others
@@ -51,9 +55,14 @@ class LoopHooks:
         self.rank = comm.Get_rank() if comm is not None else 0
         self.fault = parse_fault((os.environ if environ is None else environ).get(FAULT_VAR))
         self.interrupted = 0
-        self._previous = signal.signal(signal.SIGINT, self._on_sigint)
+        self._previous = {signal.SIGINT: signal.signal(signal.SIGINT, self._on_signal)}
+        # Slurm's SIGTERM at the time limit and the SIGUSR1 the batch scripts ask for
+        # would otherwise kill the ranks mid-write; whoever handles them already keeps them.
+        for sig in (signal.SIGTERM, signal.SIGUSR1):
+            if signal.getsignal(sig) == signal.SIG_DFL:
+                self._previous[sig] = signal.signal(sig, self._on_signal)
 
-    def _on_sigint(self, signum, frame):
+    def _on_signal(self, signum, frame):
         if self.interrupted:             # asked twice: stop now, whatever it costs
             raise KeyboardInterrupt
         self.interrupted = 1
@@ -70,8 +79,9 @@ class LoopHooks:
                 raise KeyboardInterrupt
 
     def done(self):
-        """After the loop: SIGINT gets its previous handler back."""
-        signal.signal(signal.SIGINT, self._previous)
+        """After the loop: the signals get their previous handlers back."""
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
         self.progress.done()
 
     def __getattr__(self, name):         # done(), phase(), ... of the wrapped progress

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from ..errors import EXIT_BAD_INPUT, ConfigError
 
 OPENMPI, MPICH = "Open MPI", "MPICH"
+BATCH_STEPS = ("batch", "extern", "4294967294", "4294967295")
 
 
 class LauncherError(ConfigError):
@@ -70,8 +71,9 @@ def detect_launcher(env=None) -> Launcher | None:
     if "OMPI_COMM_WORLD_SIZE" in env:
         return Launcher("Open MPI's mpirun", OPENMPI, _int(env, "OMPI_COMM_WORLD_SIZE"),
                         _int(env, "OMPI_COMM_WORLD_RANK"), f"OMPI_COMM_WORLD_SIZE={env['OMPI_COMM_WORLD_SIZE']}")
-    if "SLURM_STEP_ID" in env and "SLURM_PROCID" in env:
-        size = _int(env, "SLURM_STEP_NUM_TASKS") or _int(env, "SLURM_NTASKS")
+    # srun's own steps only: the batch and extern steps (ids 4294967294/5) are one process, whatever SLURM_NTASKS says.
+    if "SLURM_STEP_ID" in env and "SLURM_PROCID" in env and env["SLURM_STEP_ID"] not in BATCH_STEPS:
+        size = _int(env, "SLURM_STEP_NUM_TASKS")
         return Launcher("Slurm's srun", None, size, _int(env, "SLURM_PROCID"),
                         f"SLURM_STEP_ID={env['SLURM_STEP_ID']}", "PMIX_RANK" in env and not pmi_wireup)
     if "HYDI_CONTROL_FD" in env or "PMI_SIZE" in env:
