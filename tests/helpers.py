@@ -1,7 +1,16 @@
-"""Shared builders for the tests: scenes from dotted overrides, state access by global id."""
+"""Shared builders for the tests: scenes from dotted overrides, state access by global id,
+drawn interface records, and the command line run on several ranks with either output writer."""
 from __future__ import annotations
 
+import functools
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from parslip.engine.reference import Simulation as ReferenceSimulation
 from parslip.engine.simulation import Simulation
@@ -104,3 +113,81 @@ def draw(iface, k0, s0, d, fps, width, slip, crack=False, sites=None, slip_v=0.0
         iface["ux"][k_slip:, s] += slip
         iface["uy"][k_slip:, s] += slip_v
     return arr
+
+
+# ---------------------------------------------------------------- the command line under MPI --
+# Two ways to run parslip on several ranks, each with its own MPI and its own writer:
+#   "gather": this Python (PyPI's serial h5py) under the mpich wheel's mpiexec;
+#   "mpio":   the venv slurm/install-parallel-hdf5.sh builds (h5py with MPI) under
+#             Debian's mpiexec.mpich, the launcher of the MPICH that venv loads.
+REPO = Path(__file__).resolve().parents[1]
+MPIO_VENV = Path(os.environ.get("PARSLIP_MPIO_VENV") or REPO / ".venv-mpio")
+MPIO_PYTHON = str(MPIO_VENV / "bin" / "python")
+MPIO_MPIEXEC = shutil.which("mpiexec.mpich")
+
+
+def _wheel_mpiexec():
+    """The mpich wheel installs its mpiexec beside the interpreter; PATH may hold Open MPI's first."""
+    beside = os.path.join(os.path.dirname(sys.executable), "mpiexec")
+    return beside if os.access(beside, os.X_OK) else shutil.which("mpiexec")
+
+
+WHEEL_MPIEXEC = _wheel_mpiexec()
+WRITERS = ("gather", "mpio")
+
+
+@functools.cache
+def mpio_missing() -> str | None:
+    """Why the mpio venv cannot run here, or None when it can."""
+    if not MPIO_MPIEXEC:
+        return "no mpiexec.mpich (Debian's mpich package)"
+    if not os.access(MPIO_PYTHON, os.X_OK):
+        return f"no {MPIO_PYTHON}"
+    p = subprocess.run([MPIO_PYTHON, "-c", "import h5py; assert h5py.get_config().mpi"], capture_output=True,
+                       text=True, timeout=120)
+    return None if p.returncode == 0 else f"h5py in {MPIO_VENV} has no MPI: {p.stderr.strip()[-200:]}"
+
+
+def unavailable(what: str) -> None:
+    """Skip a test that needs what tests/install.sh provides; in CI, where it has run, fail instead."""
+    msg = f"{what}; run `bash tests/install.sh`"
+    if os.environ.get("CI") == "true":
+        pytest.fail(msg)
+    pytest.skip(msg)
+
+
+def require(writer: str) -> None:
+    """Skip (or, in CI, fail) a test whose writer cannot run here."""
+    why = mpio_missing() if writer == "mpio" else (None if WHEEL_MPIEXEC else "no mpiexec (the mpich wheel)")
+    if why:
+        unavailable(f"{writer} writer unavailable: {why}")
+
+
+def cli_command(n: int, *args, writer: str = "gather") -> list[str]:
+    """argv of `parslip ARGS` on n ranks with the given writer's MPI and Python."""
+    require(writer)
+    mpiexec, python = (MPIO_MPIEXEC, MPIO_PYTHON) if writer == "mpio" else (WHEEL_MPIEXEC, sys.executable)
+    return [mpiexec, "-n", str(n), python, "-m", "parslip", *map(str, args)]
+
+
+def cli_env(**extra) -> dict:
+    """The environment for cli_command: this checkout first on the path, whichever Python runs it."""
+    env = dict(os.environ, **extra)
+    env["PYTHONPATH"] = os.pathsep.join([str(REPO)] + [p for p in [env.get("PYTHONPATH")] if p])
+    return env
+
+
+def run_cli(n: int, *args, writer: str = "gather", env: dict | None = None, timeout: float = 300):
+    """`parslip ARGS` on n ranks, as a user starts it; returns the finished process (text output)."""
+    return subprocess.run(cli_command(n, *args, writer=writer), env=cli_env(**(env or {})), capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def datasets(path) -> tuple[dict, dict]:
+    """Every dataset of an HDF5 file by name, and its root attributes."""
+    import h5py
+    out = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[...]) if isinstance(obj, h5py.Dataset) else None)
+        attrs = dict(f.attrs)
+    return out, attrs

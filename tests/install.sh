@@ -58,5 +58,21 @@ install_paraview() {
     command -v pvpython >/dev/null
 }
 
+# --- Collective HDF5 output and the launcher check -------------------------------------------------
+# The mpio venv (mpi4py and h5py built against Debian's MPICH and parallel HDF5, .venv-mpio/) that
+# tests/test_parallel.py, test_failures.py and test_launcher.py run the command line in, and Open MPI's
+# mpirun, the foreign launcher that tests/test_launcher.py is refused by.
+install_mpio() {
+    bash slurm/install-parallel-hdf5.sh
+    if ! command -v mpirun.openmpi >/dev/null; then
+        local sudo=""
+        [ "$(id -u)" = 0 ] || sudo=sudo
+        $sudo apt-get update -q >/dev/null
+        $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q -o DPkg::Lock::Timeout=900 \
+            --no-install-recommends openmpi-bin >/dev/null
+    fi
+}
+
 install_python
 install_paraview
+install_mpio

@@ -19,6 +19,7 @@ import sys
 import time
 
 from ..errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, ConfigError
+from ..parallel.launcher import start_or_refuse
 from ..scene.load import load_scene_file, parse_set, resolve
 from ..scene.schema import describe_keys
 
@@ -138,7 +139,9 @@ def cmd_run(args) -> int:
     from ..engine.simulation import Simulation
     from ..errors import RunError
     from ..io.output import Output, git_commit
+    from ..io.writer_mode import writer_line
     from ..scene.derive import derive
+    from .loop_hooks import hook_loop
     from .progress import Progress, setup_logging
 
     comm = _comm()
@@ -153,9 +156,10 @@ def cmd_run(args) -> int:
                        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                        "command": " ".join(sys.argv)} if rank == 0 else None, root=0)
     writer = Output(out, sim, comm, prov)
+    log.info(writer_line(writer.mode))
     log.info(f"{args.scene}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
              f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {out}")
-    prog = Progress(st, scene["output.progress_s"], enabled=(rank == 0 and not args.quiet))
+    prog = hook_loop(Progress(st, scene["output.progress_s"], enabled=(rank == 0 and not args.quiet)), comm, st)
     t0 = time.monotonic()
     try:
         sim.run(writer, prog)
@@ -196,6 +200,8 @@ def cmd_run(args) -> int:
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
+    if args.cmd == "run" and (refused := start_or_refuse()):   # before anything touches MPI
+        return refused
     try:
         return _main(args)
     except Exception:

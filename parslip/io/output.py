@@ -48,8 +48,9 @@ def git_commit() -> str:
         return "unknown"
 
 
-def hdf5_mode(size: int) -> str:
-    return "mpio" if size > 1 and h5py.get_config().mpi else "gather"
+def hdf5_mode(size: int, comm=None) -> str:
+    # With a communicator, an MPI-enabled h5py writes through mpio on any rank count, one included.
+    return "mpio" if (size > 1 or comm is not None) and h5py.get_config().mpi else "gather"
 
 
 class Output:
@@ -60,7 +61,7 @@ class Output:
         st, lay, lat = sim.setup, sim.layout, sim.setup.lattice
         self.rank = lay.rank
         self.size = lay.size
-        self.mode = hdf5_mode(self.size)
+        self.mode = hdf5_mode(self.size, comm)
         self.root = self.rank == 0
         self.f = self._open(path, comm)
 
