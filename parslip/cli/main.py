@@ -47,6 +47,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scene key; the value is a TOML literal (drive.v0=1e-2, drive.mode=pull)")
     r.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    r.add_argument("--restart", metavar="CHECKPOINT|auto",
+                   help="continue from a checkpoint (OUT.ckpt.h5), appending to --out; 'auto': continue from "
+                        "OUT.ckpt.h5 if it exists and the run is not complete, else start (nothing if complete); "
+                        "any rank count")
+    r.add_argument("--stop-after", metavar="WALLTIME",
+                   help="wall-clock time (HH:MM:SS or seconds) after which the run writes a checkpoint and "
+                        "stops cleanly, printing the command that continues it")
     r.add_argument("--no-png", action="store_true", help="skip the space-time PNG")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
     i = sub.add_parser("info", help="derived quantities, memory and output size of a scene", epilog=UNITS_HELP,
@@ -83,12 +90,19 @@ def load(scene_path: str, sets: list[str]) -> dict:
     return resolve(raw, [parse_set(s) for s in sets])
 
 
-def _out_path(args) -> str:
+def _out_path(args, must_exist: bool = False, may_exist: bool = False) -> str:
+    """The output file (default out/<scene>.vtkhdf): new unless --overwrite, existing for a restart."""
     out = args.out or os.path.join("out", os.path.splitext(os.path.basename(args.scene))[0] + ".vtkhdf")
     if os.path.isdir(out):
         raise ConfigError(f"--out {out!r}: is a directory; accepted: a file path")
-    if os.path.exists(out) and not args.overwrite:
-        raise ConfigError(f"--out {out!r}: exists; accepted: a new path, or --overwrite to replace it")
+    if must_exist:
+        if not os.path.isfile(out):
+            raise ConfigError(f"--out {out!r}: no such file; a restart appends to the output file of the run that "
+                              f"wrote the checkpoint; accepted: that file")
+        return out
+    if os.path.exists(out) and not (args.overwrite or may_exist):
+        raise ConfigError(f"--out {out!r}: exists; accepted: a new path, --overwrite to replace it, or "
+                          f"--restart to continue it")
     d = os.path.dirname(out)
     try:
         if d:
@@ -135,67 +149,8 @@ def cmd_info(args) -> int:
 
 
 def cmd_run(args) -> int:
-    from .. import analysis
-    from ..engine.simulation import Simulation
-    from ..errors import RunError
-    from ..io.output import Output, git_commit
-    from ..io.writer_mode import writer_line
-    from ..scene.derive import derive
-    from .loop_hooks import hook_loop
-    from .progress import Progress, setup_logging
-
-    comm = _comm()
-    rank, size = comm.Get_rank(), comm.Get_size()
-    log = setup_logging(rank, size)
-    scene = _bcast(comm, lambda: load(args.scene, args.set))
-    omega = _bcast(comm, lambda: (lambda s: (s.omega_max, s.omega_method))(derive(scene)))
-    st = derive(scene, omega)
-    out = _bcast(comm, lambda: _out_path(args))
-    sim = Simulation(st, comm)              # raises ConfigError on every rank alike
-    prov = comm.bcast({"git_commit": git_commit(), "scene_file": os.path.abspath(args.scene),
-                       "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-                       "command": " ".join(sys.argv)} if rank == 0 else None, root=0)
-    writer = Output(out, sim, comm, prov)
-    log.info(writer_line(writer.mode))
-    log.info(f"{args.scene}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
-             f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {out}")
-    prog = hook_loop(Progress(st, scene["output.progress_s"], enabled=(rank == 0 and not args.quiet)), comm, st)
-    t0 = time.monotonic()
-    try:
-        sim.run(writer, prog)
-    except RunError as e:
-        writer.close(status=f"failed: {e}")
-        prog.done()
-        if rank == 0:
-            print(f"parslip: run failed: {e}", file=sys.stderr)
-        return EXIT_RUN_FAILED
-    except KeyboardInterrupt:
-        # Keep what was written, and say so in the file: frames_written tells how far it got.
-        writer.close(status=f"interrupted at step {sim.n}")
-        prog.done()
-        if rank == 0:
-            print(f"parslip: interrupted at step {sim.n}; partial output kept in {out}", file=sys.stderr)
-        return 130
-    prog.done()
-    wall = time.monotonic() - t0
-    writer.close("complete")
-    counts = comm.reduce(sim.counters.copy(), root=0) if size > 1 else sim.counters
-    if rank == 0 and st.n_snapshots:    # snapshots as a time series for any ParaView (io/xdmf.py); no collective follows
-        from ..io.xdmf import write_xdmf
-        write_xdmf(out)
-    if rank == 0:
-        ups = st.n_steps * st.lattice.n_nodes / wall
-        log.info(f"done in {wall:.1f} s: {st.n_steps / wall:,.0f} steps/s, {ups / 1e6:.1f} M node-updates/s "
-                 f"on {size} rank(s); {int(counts[0])} bond breaks, {int(counts[1])} re-formations")
-        iface = analysis.load_interface(out)
-        print(analysis.summary(iface))
-        png = os.path.splitext(out)[0] + "_spacetime.png"
-        if not args.no_png and analysis.spacetime_png(
-                iface, png, f"{os.path.basename(args.scene)}: {scene['drive.mode']}, v0/c_r = {scene['drive.v0']:g}"):
-            log.info(f"wrote {out} and {png}")
-        else:
-            log.info(f"wrote {out}")
-    return 0
+    from .run import cmd_run as run
+    return run(args, _comm(), lambda fn: _bcast(_comm(), fn), load, _out_path)
 
 
 def main(argv=None) -> int:

@@ -120,15 +120,28 @@ class Simulation:
         n = self.n if n is None else n
         return self.state.potential_energy(n, self.load_factor(n) if load is None else load)
 
-    def run(self, writer=None, progress=None, until: int | None = None):
-        """Advance to step ``until`` (default: the end), writing frames and snapshots on the way."""
+    def run(self, writer=None, progress=None, until: int | None = None, control=None):
+        """Advance to step ``until`` (default: the end), writing frames and snapshots on the way.
+
+        ``control`` (``cli.run.RunControl``) is asked between calls of the compiled loop, on every
+        rank at the same step, whether to stop for a checkpoint or for good: then ``run`` returns its
+        action with every frame so far written, and a later ``run`` carries on.  Returns None at the end.
+        """
         st = self.setup
         end = st.n_steps if until is None else until
+        chunk = self.chunk
         while True:
             self._snapshot(writer)
+            if control is not None:
+                action, steps = control.decide(self)
+                chunk = steps or chunk
+                if action is not None:
+                    self._flush(writer)
+                    return action
             if self.n >= end:
                 break
-            target = min(end, self.n + self.chunk, min((k for k in self._snap if k > self.n), default=end))
+            target = min(end, self.n + chunk, min((k for k in self._snap if k > self.n), default=end),
+                         control.next_stop(self.n) if control is not None else end)
             why = self.advance(target)
             if why == L.FRAMES_FULL:
                 self._flush(writer)
@@ -139,6 +152,7 @@ class Simulation:
                 progress.update(self.n)
         self.advance(self.n)                 # the frame of the last step, if it is one
         self._flush(writer)
+        return None
 
     # --------------------------------------------------------------- output --
     @property

@@ -36,13 +36,28 @@ def path_for(out: str) -> str:
     return out + ".ckpt.h5"
 
 
+KILL_VAR = "PARSLIP_TEST_KILL_CHECKPOINT"
+_written = 0
+
+
 def write(path: str, parts: dict, attrs: dict) -> None:
-    """Write a checkpoint (rank 0 only): ``parts`` are whole arrays in global order."""
+    """Write a checkpoint (rank 0 only): ``parts`` are whole arrays in global order.
+
+    For the tests of atomicity, ``PARSLIP_TEST_KILL_CHECKPOINT=K`` kills this
+    process with SIGKILL halfway through writing its K-th checkpoint.
+    """
     import h5py
+    global _written
+    _written += 1
+    kill = os.environ.get(KILL_VAR) == str(_written)
     tmp = path + ".tmp"
     with h5py.File(tmp, "w") as f:
         for name in DATASETS:
             f.create_dataset(name, data=parts[name])
+            if kill:
+                f.flush()
+                import signal
+                os.kill(os.getpid(), signal.SIGKILL)
         for k, v in attrs.items():
             f.attrs[k] = v
         f.attrs["format"] = FORMAT

@@ -53,17 +53,31 @@ def hdf5_mode(size: int, comm=None) -> str:
     return "mpio" if (size > 1 or comm is not None) and h5py.get_config().mpi else "gather"
 
 
+def _early():
+    """Dataset creation: every chunk allocated when the dataset is (or grows), never filled.
+
+    Writes of frames and snapshots then change no metadata, so a file flushed
+    at a checkpoint stays readable if the process is killed afterwards, and a
+    restart can append to it.
+    """
+    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+    dcpl.set_alloc_time(h5py.h5d.ALLOC_TIME_EARLY)
+    dcpl.set_fill_time(h5py.h5d.FILL_TIME_NEVER)
+    return dcpl
+
+
 class Output:
     """Writes the contract above; every method is collective over the ranks."""
 
-    def __init__(self, path: str, sim, comm=None, provenance: dict | None = None):
-        self.sim, self.comm = sim, comm
+    def __init__(self, path: str, sim, comm=None, provenance: dict | None = None, resume: str | None = None):
+        """Create ``path`` for a new run, or with ``resume`` (the checkpoint's run id) reopen it to append."""
+        self.sim, self.comm, self.path = sim, comm, path
         st, lay, lat = sim.setup, sim.layout, sim.setup.lattice
         self.rank = lay.rank
         self.size = lay.size
         self.mode = hdf5_mode(self.size, comm)
         self.root = self.rank == 0
-        self.f = self._open(path, comm)
+        self.f = self._open(path, comm, "r+" if resume else "w")
 
         # My slices of the global arrays: OWNED nodes are a contiguous range of global ids.
         state = sim.state
@@ -85,28 +99,36 @@ class Output:
         # A bond to a rigid substrate has no substrate node: drawn, like a broken bond, as a point-line.
         self.bottom_gid_of_site = ((lambda q: np.full(np.shape(q), -1, np.int64)) if lat.rigid else
                                    (lambda q: lat.gid(BOTTOM, lat.bottom.rows - 1, q)))
-        self._create(st, provenance or {})
+        if resume:
+            self._resume(st, resume)
+        else:
+            self._create(st, provenance or {})
+        self.flush()
 
     # ------------------------------------------------------------ plumbing --
-    def _open(self, path, comm):
-        """Open for writing; a file that cannot be opened is bad input on every rank."""
+    def _open(self, path, comm, how):
+        """Open for writing (``how`` "w" or "r+"); a file that cannot be opened is bad input on every rank."""
         err, f = None, None
         try:
             if self.mode == "mpio":
-                f = h5py.File(path, "w", driver="mpio", comm=comm)
+                f = h5py.File(path, how, driver="mpio", comm=comm)
             elif self.root:
-                f = h5py.File(path, "w")
+                f = h5py.File(path, how)
         except OSError as e:
             err = f"--out {path!r}: cannot open for writing ({e.__class__.__name__}: {e}); " \
                   "accepted: a writable path not held open by another program"
+        self._agree(err, f)
+        return f
+
+    def _agree(self, err, f=None):
+        """Raise the first rank's error on every rank (closing the file), so no rank waits for another."""
         if self.size > 1:
-            errs = [m for m in comm.allgather(err) if m]
+            errs = [m for m in self.comm.allgather(err) if m]
             err = errs[0] if errs else None
         if err:
             if f is not None:
                 f.close()
             raise ConfigError(err)
-        return f
 
     def _allgather(self, x):
         return [x] if self.comm is None or self.size == 1 else self.comm.allgather(x)
@@ -124,13 +146,11 @@ class Output:
                     ds[idx] = d
 
     def _create(self, st, prov):
-        """Create every dataset at its final size (collective under mpio)."""
+        """Create every dataset (collective under mpio), sized for this run and growable for a restart."""
         f = self.f
         if f is None:
             return
-        lat = st.lattice
-        nf, ns, N, M = st.n_frames, self.n_sites, self.n_nodes, self.n_cells
-        S = st.n_snapshots
+        nf, ns, N = self.sim.frames_total, self.n_sites, self.n_nodes
         a = f.attrs
         a["scene"] = to_toml(st.scene)
         for k, v in prov.items():
@@ -147,6 +167,8 @@ class Output:
         a["dt_limit"] = st.dt_limit
         a["omega_max"] = st.omega_max
         a["omega_method"] = st.omega_method
+        a["precision"] = st.precision
+        a["substrate"] = st.lattice.substrate
         a["c_s"], a["c_l"], a["c_r"] = st.material.c_s, st.material.c_l, st.material.c_r
         a["c_surface_born"] = st.material.c_surface_born
         a["kn_top"], a["kt_top"] = st.material.kn_top, st.material.kt_top
@@ -157,68 +179,84 @@ class Output:
         g = f.create_group("interface")
         g.attrs["frame_every_steps"] = st.frame_every
         g.attrs["frames_written"] = 0
+        rows = max(1, min(max(nf, 1), (1 << 16) // max(ns, 1)))
         for name, (dt_, per_frame, unit) in INTERFACE_DATASETS.items():
-            shape = (nf, ns) if per_frame else ((nf,) if name == "time" else (ns,))
-            ds = g.create_dataset(name, shape=shape, dtype=dt_,
-                                  chunks=(max(1, min(nf, (1 << 16) // max(ns, 1))), ns)
-                                  if len(shape) == 2 and ns else None)
+            if per_frame:
+                ds = g.create_dataset(name, shape=(nf, ns), maxshape=(None, ns), dtype=dt_,
+                                      chunks=(rows, max(ns, 1)), dcpl=_early())
+            elif name == "time":
+                ds = g.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=dt_, chunks=(max(rows, 64),),
+                                      dcpl=_early())
+            else:
+                ds = g.create_dataset(name, shape=(ns,), dtype=dt_)
             ds.attrs["units"] = unit
         if self.root:
-            g["time"][...] = [st.to_lcr(k * st.frame_every * st.dt) for k in range(nf)]
             g["x"][...] = (np.arange(ns) + 0.5) / ns    # node s stands at the middle of its spacing
-        if S == 0:          # no snapshots asked for: no empty VTKHDF group either
-            return
+        if self.sim.snapshots_total == 0 or st.scene["output.fields"] == "interface":
+            return          # no snapshots asked for: no empty VTKHDF group either
         v = f.create_group("VTKHDF")
         v.attrs["Version"] = np.array([2, 2], np.int64)
         v.attrs["Type"] = np.bytes_(b"UnstructuredGrid")
-        i8 = np.int64
-        for name, shape, dt_ in (("NumberOfPoints", (S,), i8), ("NumberOfCells", (S,), i8),
-                                 ("NumberOfConnectivityIds", (S,), i8), ("Points", (S * N, 3), np.float64),
-                                 ("Types", (S * M,), np.uint8), ("Offsets", (S * (M + 1),), i8),
-                                 ("Connectivity", (S * 2 * M,), i8)):
-            v.create_dataset(name, shape=shape, dtype=dt_)
-        pd, cd = v.create_group("PointData"), v.create_group("CellData")
-        pd.create_dataset("velocity", shape=(S * N, 3), dtype=np.float64)
+        S = self.sim.snapshots_total
+        for name, shape in self._vtk_shapes(S).items():
+            dt_ = np.uint8 if name in ("Types", "CellData/interface", "CellData/intact") else (
+                np.float64 if name.startswith(("Points", "PointData")) or name == "Steps/Values" else np.int64)
+            if name == "Steps/Values":
+                shape = (0,)              # grows with each snapshot: VTK's reader needs len(Values) == NSteps
+            v.create_dataset(name, shape=shape, maxshape=(None,) + shape[1:], dtype=dt_,
+                             chunks=(max(1, min(max(shape[0], 1), 1 << 16)),) + shape[1:], dcpl=_early())
+        v["Steps"].attrs["NSteps"] = np.int64(0)
+
+    def _vtk_shapes(self, S: int) -> dict:
+        """Shapes of the VTKHDF datasets for S snapshots (N points, M line cells each)."""
+        N, M = self.n_nodes, self.n_cells
+        shapes = {"NumberOfPoints": (S,), "NumberOfCells": (S,), "NumberOfConnectivityIds": (S,),
+                  "Points": (S * N, 3), "Types": (S * M,), "Offsets": (S * (M + 1),), "Connectivity": (S * 2 * M,),
+                  "PointData/velocity": (S * N, 3), "CellData/interface": (S * M,), "CellData/intact": (S * M,),
+                  "Steps/Values": (S,), "Steps/PartOffsets": (S,), "Steps/NumberOfParts": (S,),
+                  "Steps/PointOffsets": (S,), "Steps/CellOffsets": (S,), "Steps/ConnectivityIdOffsets": (S,)}
         for name in ("sxx", "syy", "sxy"):
-            pd.create_dataset(name, shape=(S * N,), dtype=np.float64)
-        for name in ("interface", "intact"):
-            cd.create_dataset(name, shape=(S * M,), dtype=np.uint8)
-        s = v.create_group("Steps")
-        s.attrs["NSteps"] = i8(0)
-        s.create_dataset("Values", shape=(0,), maxshape=(max(S, 1),), dtype=np.float64, chunks=(max(S, 1),))
-        k = np.arange(S, dtype=i8)
-        consts = {"PartOffsets": k, "NumberOfParts": np.ones(S, i8), "PointOffsets": k * N,
-                  "CellOffsets": k * M, "ConnectivityIdOffsets": k * 2 * M}
-        for name in consts:
-            s.create_dataset(name, shape=(S,), dtype=i8)
-        po, co = s.create_group("PointDataOffsets"), s.create_group("CellDataOffsets")
+            shapes[f"PointData/{name}"] = (S * N,)
         for name in ("velocity", "sxx", "syy", "sxy"):
-            po.create_dataset(name, shape=(S,), dtype=i8)
+            shapes[f"Steps/PointDataOffsets/{name}"] = (S,)
         for name in ("interface", "intact"):
-            co.create_dataset(name, shape=(S,), dtype=i8)
-        if self.root:
-            for name, val in consts.items():
-                s[name][...] = val
-            for name in ("velocity", "sxx", "syy", "sxy"):
-                po[name][...] = k * N
-            for name in ("interface", "intact"):
-                co[name][...] = k * M
-            v["NumberOfPoints"][...] = N
-            v["NumberOfCells"][...] = M
-            v["NumberOfConnectivityIds"][...] = 2 * M
-            offs = 2 * np.arange(M + 1, dtype=i8)
-            for j in range(S):
-                v["Offsets"][j * (M + 1):(j + 1) * (M + 1)] = offs
-                v["Types"][j * M:(j + 1) * M] = VTK_LINE
+            shapes[f"Steps/CellDataOffsets/{name}"] = (S,)
+        return shapes
+
+    def _resume(self, st, run_id: str):
+        """A restart: the file must be this run's; its datasets grow to what the rest of the run writes."""
+        f = self.f
+        err = None
+        if f is not None and str(f.attrs.get("run_id", "")) != run_id:
+            err = (f"--out {self.path!r}: belongs to another run than the checkpoint (run_id "
+                   f"{f.attrs.get('run_id', '')!r}, checkpoint {run_id!r}); accepted: the output file the "
+                   f"checkpointed run wrote")
+        self._agree(err, f)
+        if f is not None:
+            g = f["interface"]
+            nf = self.sim.frames_total
+            for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
+                if per_frame or name == "time":
+                    g[name].resize(nf, axis=0)
+            if "VTKHDF" in f:
+                for name, shape in self._vtk_shapes(self.sim.snapshots_total).items():
+                    if name != "Steps/Values":
+                        f["VTKHDF"][name].resize(shape[0], axis=0)
+            f.attrs["status"] = "running"
+            f.attrs["scene"] = to_toml(st.scene)
+            f.attrs["n_ranks"] = self.size
 
     # --------------------------------------------------------------- writes --
-    def interface_frames(self, k0, count, frames):
-        """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites."""
+    def interface_frames(self, k0, count, frames, times):
+        """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites,
+        recorded at ``times`` (l/c_r)."""
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
         for name in FRAME_FIELDS:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         if self.f is not None:
+            if self.root:
+                self.f["interface/time"][k0:k0 + count] = times
             self.f["interface"].attrs["frames_written"] = k0 + count
 
     def snapshot(self, k, t, pos, vel, sig, partner):
@@ -243,12 +281,29 @@ class Output:
         self._put("VTKHDF/CellData/interface", (slice(i0, i0 + ns),), np.ones(ns, np.uint8))
         self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
         if self.f is not None:
-            s = self.f["VTKHDF/Steps"]
-            s["Values"].resize((k + 1,))
+            v = self.f["VTKHDF"]
+            if self.root:             # the step's constants: one part, line cells, offsets into the flat arrays
+                for name, val in (("NumberOfPoints", N), ("NumberOfCells", M), ("NumberOfConnectivityIds", 2 * M),
+                                  ("Steps/PartOffsets", k), ("Steps/NumberOfParts", 1),
+                                  ("Steps/PointOffsets", k * N), ("Steps/CellOffsets", k * M),
+                                  ("Steps/ConnectivityIdOffsets", k * 2 * M)):
+                    v[name][k] = val
+                for name in ("velocity", "sxx", "syy", "sxy"):
+                    v[f"Steps/PointDataOffsets/{name}"][k] = k * N
+                for name in ("interface", "intact"):
+                    v[f"Steps/CellDataOffsets/{name}"][k] = k * M
+                v["Offsets"][k * (M + 1):(k + 1) * (M + 1)] = 2 * np.arange(M + 1, dtype=np.int64)
+                v["Types"][k * M:(k + 1) * M] = VTK_LINE
+            v["Steps/Values"].resize((k + 1,))
             if self.root:
-                s["Values"][k] = t
+                v["Steps/Values"][k] = t
             # NSteps must never be below len(Values): VTK's reader corrupts memory otherwise.
-            s.attrs["NSteps"] = np.int64(k + 1)
+            v["Steps"].attrs["NSteps"] = np.int64(k + 1)
+
+    def flush(self):
+        """Everything written so far onto disk (collective): done at start-up and before each checkpoint."""
+        if self.f is not None:
+            self.f.flush()
 
     def close(self, status: str = "complete"):
         if self.f is not None:

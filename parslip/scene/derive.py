@@ -106,7 +106,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     n_drive = max(1, int(math.ceil(scene["drive.duration"] * t_unit / dt)))
     frame_dt = scene["output.interface_dt"] * t_unit if scene["output.interface_dt"] > 0 else 1.0 / mat.c_r
     frame_every = max(1, int(math.floor(frame_dt / dt + 1e-9)))
-    nsnap = scene["output.snapshots"]
+    nsnap = scene["output.snapshots"] if scene["output.fields"] == "all" else 0
     snaps = () if nsnap == 0 else tuple(sorted({int(round(j * n_drive / nsnap)) for j in range(nsnap + 1)}))
     v0 = scene["drive.v0"] * mat.c_r
     reach = scene["interface.slip_reach"]

@@ -97,6 +97,9 @@ SCHEMA: dict[str, Key] = {
     "output.interface_dt": Key(0.0, float, "l/c_r", ">= 0 (0 = auto: a/c_r, one frame per spacing a front at c_r crosses)",
                                _range(0.0), "interval between interface frames"),
     "output.snapshots": Key(20, int, "-", ">= 0", _range(0), "whole-lattice snapshots over the drive, plus one at its start"),
+    "output.fields": Key("all", str, "-", "'all' or 'interface'", _choice("all", "interface"),
+                         "what a run writes: the interface record and whole-lattice snapshots, or the "
+                         "interface record only (no snapshot is computed, held or written)"),
     "output.progress_s": Key(10.0, float, "s", "> 0", _range(0.0, lo_open=True),
                              "wall-clock interval between progress lines"),
     # checkpoints -------------------------------------------------------------------
