@@ -50,9 +50,9 @@ class _TimedWriter:
     def __init__(self, out):
         self.out, self.seconds, self.frames = out, 0.0, 0
 
-    def interface_frames(self, k0, count, frames):
+    def interface_frames(self, k0, count, frames, times):
         t = time.perf_counter()
-        self.out.interface_frames(k0, count, frames)
+        self.out.interface_frames(k0, count, frames, times)
         self.seconds += time.perf_counter() - t
         self.frames += count
 

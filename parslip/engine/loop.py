@@ -27,7 +27,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ..parallel.exchange import COMPLETE, POST, REDUCE, exchange
+from ..parallel.exchange import COMPLETE, POST, PROGRESS, REDUCE, exchange
 from ..parallel.layout import FULL, NO_DOWN, PAD
 from .kernels import interface as ik
 from .kernels.clock import now_ns
@@ -119,11 +119,15 @@ def _nodes(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, drive0, drive_on, shift
 
 
 @njit(cache=True, _nrt=False)
-def _tasks(phase, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy):
-    """The tasks of one phase (0: early, 1: the rest); ``ptr[phase, block]`` = [rows start, nodes start, end]."""
+def _tasks(phase, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy,
+           plan=None):
+    """The tasks of one phase (0: early, 1: the rest); ``ptr[phase, block]`` = [rows start, nodes start, end].
+    With ``plan`` (the late phase), MPI is given a chance to move the halo messages halfway through."""
     p = ptr[phase]
     _rows(p[0, 0], p[0, 1], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, iface.zeros, drive0,
           False, shift, gy)
+    if plan is not None:
+        exchange(PROGRESS, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, iface.counters)
     _nodes(p[0, 1], p[0, 2], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, drive0, False, shift, gy)
     _rows(p[1, 0], p[1, 1], tasks, ctx, cty, ntx, nty, K, sp, iface.ext_x, iface.ext_y, iface.zeros, drive0,
           drive_on, shift, gy)
@@ -213,7 +217,7 @@ def _step(n, cbx, cby, ctx, cty, nbx, nby, ntx, nty, plan, tasks, ptr, K, ip, fp
     t2 = now_ns(clk) if timed else 0
     err = exchange(POST, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, flags)
     t3 = now_ns(clk) if timed else 0
-    _tasks(1, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy)
+    _tasks(1, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy, plan)
     t4 = now_ns(clk) if timed else 0
     err |= exchange(COMPLETE, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, flags)
     if timed:

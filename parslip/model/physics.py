@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 ROW_HEIGHT = math.sqrt(3.0) / 2.0          # y spacing of lattice rows, in a
 CELL_AREA = ROW_HEIGHT                     # area per node, in a^2
@@ -77,13 +76,33 @@ def _surface_det(xi: float, r: float, eta_frac: float) -> float:
     return d.real if abs(d.real) >= abs(d.imag) else d.imag
 
 
+def _bisect(f, a: float, b: float) -> float:
+    """The root of f in [a, b] (a sign change) by bisection, to the last bit of a double.
+
+    Bisection rather than SciPy's Brent: it needs no SciPy at start-up, and
+    halving until the interval stops shrinking leaves one exact answer.
+    """
+    fa = f(a)
+    while True:
+        m = 0.5 * (a + b)
+        if m <= a or m >= b:
+            return m
+        fm = f(m)
+        if fm == 0.0:
+            return m
+        if (fm < 0) == (fa < 0):
+            a, fa = m, fm
+        else:
+            b = m
+
+
 def _surface_root(r: float, eta_frac: float) -> float:
     f = lambda xi: _surface_det(xi, r, eta_frac)  # noqa: E731
     xs = np.linspace(0.5, 1.0 - 1e-9, 400)
     vals = [f(x) for x in xs]
     for i in range(len(xs) - 1):
         if vals[i] == 0.0 or np.sign(vals[i]) != np.sign(vals[i + 1]):
-            return brentq(f, xs[i], xs[i + 1], xtol=1e-14)
+            return _bisect(f, xs[i], xs[i + 1])
     raise ValueError("no surface-wave root below c_s")
 
 

@@ -14,14 +14,13 @@ or degrees of freedom, which cannot raise omega_max (Cauchy interlacing).
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import eigsh
 
 from .lattice import BOTTOM, DIRECTIONS, FIXED, Lattice
 
 
 def stiffness_matrix(lattice: Lattice, kn, kt, kx: float, ky: float, mode: str = "none"):
     """K (2N x 2N, DOF order x0, y0, x1, ...) and the mask of free DOFs."""
+    import scipy.sparse as sp
     nodes = lattice.nodes_in_columns(0, lattice.ncols)
     nbr = lattice.neighbour_gids(nodes)
     rows, cols, vals = [], [], []
@@ -116,6 +115,7 @@ def omega_max(lattice: Lattice, kn, kt, kx: float, ky: float) -> tuple[float, st
         if lattice.has_interface:
             w2 += 2 * max(kx, ky)
         return float(np.sqrt(w2)), "bound"
+    from scipy.sparse.linalg import eigsh
     K, free = stiffness_matrix(lattice, kn, kt, kx, ky)
     K = K[free][:, free]
     if K.shape[0] <= 200:

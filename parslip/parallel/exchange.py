@@ -22,7 +22,7 @@ from numba import njit
 
 from . import mpi
 
-POST, COMPLETE, REDUCE = 0, 1, 2
+POST, COMPLETE, REDUCE, PROGRESS = 0, 1, 2, 3
 TAG = 7
 
 Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "
@@ -144,6 +144,8 @@ def exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
     if npeer == 0:
         return 0
     rq = plan.req.ctypes.data
+    if phase == PROGRESS:                 # let MPI move the messages while the loop computes
+        return mpi.testall(np.int32(2 * npeer), rq, plan.rflags.ctypes.data, plan.status.ctypes.data)
     isz = plan.req.itemsize
     fsz = plan.sbuf.itemsize
     if phase == POST:

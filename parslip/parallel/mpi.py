@@ -59,6 +59,7 @@ _ptr = types.voidptr
 isend = types.ExternalFunction("MPI_Isend", _int(_ptr, _int, HANDLE, _int, _int, HANDLE, _ptr))
 irecv = types.ExternalFunction("MPI_Irecv", _int(_ptr, _int, HANDLE, _int, _int, HANDLE, _ptr))
 waitall = types.ExternalFunction("MPI_Waitall", _int(_int, _ptr, _ptr))
+testall = types.ExternalFunction("MPI_Testall", _int(_int, _ptr, _ptr, _ptr))
 allreduce = types.ExternalFunction("MPI_Allreduce", _int(_ptr, _ptr, _int, HANDLE, HANDLE, HANDLE))
 
 

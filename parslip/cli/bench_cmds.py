@@ -1,0 +1,34 @@
+"""`parslip bench`: the benchmark suite (``parslip.bench.suite``) from the command line."""
+from __future__ import annotations
+
+import json
+
+
+def register(sub) -> None:
+    b = sub.add_parser("bench", help="measure throughput, start-up, output, exchange and memory on this machine; "
+                                     "prints a table, writes JSON")
+    b.add_argument("--sizes", type=int, nargs="+", default=[100, 500, 1000],
+                   help="contact lengths l to measure, in a (the paper's geometry scaled; default 100 500 1000)")
+    b.add_argument("--ranks", type=int, nargs="+", default=[1, 2], help="MPI rank counts (default 1 2)")
+    b.add_argument("--precision", nargs="+", default=["float64", "float32"], choices=["float64", "float32"])
+    b.add_argument("--seconds", type=float, default=4.0, help="wall seconds of stepping per case (default 4)")
+    b.add_argument("--quick", action="store_true", help="l = 100 and 500 only, 2 s per case")
+    b.add_argument("--no-push", action="store_true", help="skip the whole-process time of run/push.toml")
+    b.add_argument("--json", default="bench.json", help="where to write the results (default bench.json)")
+    b.set_defaults(func=cmd_bench)
+
+
+def cmd_bench(args) -> int:
+    import sys
+
+    from ..bench import suite
+    sizes = [s for s in args.sizes if not args.quick or s <= 500]
+    seconds = 2.0 if args.quick else args.seconds
+    res = suite.run(sizes=sizes, ranks=args.ranks, precisions=args.precision, seconds=seconds,
+                    push=None if args.no_push else "run/push.toml",
+                    log=lambda m: print(m, file=sys.stderr, flush=True))
+    with open(args.json, "w") as f:
+        json.dump(res, f, indent=1)
+    print(suite.table(res))
+    print(f"\n(written to {args.json})")
+    return 0

@@ -1,0 +1,62 @@
+"""How much memory a run takes, per rank, predicted from the layout before anything is allocated.
+
+The prediction adds up, for each rank, the arrays the run holds for its
+whole life (from the rank's ``parallel.layout``, exactly), the arrays a
+snapshot needs while it is written, and the process itself:
+
+    peak = BASE + persistent + max(snapshot transient, omega_max transient)
+
+- persistent: the state (two Verlet levels of x and y per block, with ghost
+  cells and halo columns, and the drive's reference), the owned-node index
+  (global id, block, row, column, array indices, reference x and y: 64 B per
+  node), the bond cells the writer keeps (48 B per node), the interface
+  frame buffer and the exchange buffers;
+- snapshot transient: the node fields of a snapshot (u(n), u(n-1), positions,
+  velocities, stresses: 104 B per node, plus 48 B of temporaries); in the
+  gathering writer, rank 0 also holds one gathered field of every rank at a
+  time (the connectivity: 48 B per node of the whole lattice, twice while it
+  is unpickled);
+- omega_max (rank 0, lattices up to 60,000 degrees of freedom): the sparse
+  stiffness and its Lanczos vectors, about 1.2 kB per node;
+- BASE: Python with NumPy, SciPy, numba, h5py, mpi4py and the compiled loop
+  loaded, measured on this kind of machine (``parslip bench`` measures it again
+  and reports the prediction against the measured peak).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+BASE = 215 << 20
+INDEX_BYTES = 64
+CELL_BYTES = 48
+SNAPSHOT_BYTES = 152
+GATHER_BYTES = 96
+OMEGA_BYTES = 1200
+
+
+def predict(setup, ranks: int, gather: bool = True) -> dict:
+    """Predicted peak resident bytes of each rank of a run of ``setup`` on ``ranks`` ranks."""
+    from ..model.stability import LANCZOS_MAX_DOFS
+    from ..parallel.layout import build_layout
+    lat = setup.lattice
+    item = np.dtype(setup.dtype).itemsize
+    snapshots = setup.n_snapshots > 0
+    per_rank = []
+    for rank in range(ranks):
+        lay = build_layout(lat, rank, ranks, setup.reach, setup.scene["drive.mode"])
+        bl, tl = lay.blocks
+        cells = lambda b: int(np.prod(b.shape))           # noqa: E731
+        state = item * (4 * cells(bl) + 5 * cells(tl))     # 2 levels x (x, y), and the drive's reference (top)
+        c0, c1 = lay.col_range
+        owned = int(lat.col_start[c1] - lat.col_start[c0])
+        sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
+        frames = min(max(16, (8 << 20) // max(sites * 37 + 8, 1)), setup.n_frames) * (sites * 37 + 8)
+        persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames
+        transient = owned * SNAPSHOT_BYTES if snapshots else 0
+        if rank == 0 and gather and snapshots and ranks > 1:
+            transient += lat.n_nodes * GATHER_BYTES
+        omega = lat.n_nodes * OMEGA_BYTES if rank == 0 and 2 * lat.n_nodes <= LANCZOS_MAX_DOFS else 0
+        per_rank.append(BASE + persistent + max(transient, omega))
+    n = max(lat.n_nodes, 1)
+    return {"per_rank": per_rank, "total": sum(per_rank),
+            "bytes_per_node": (sum(per_rank) - ranks * BASE) / n}
