@@ -184,7 +184,7 @@ def test_collective_mpio_and_gathered_files_are_identical(small_runs, n):
     (mpio, mpio_attrs, _), (gather, gather_attrs, _) = small_runs.get("mpio", n), small_runs.get("gather", n)
     assert (mpio_attrs["hdf5_mode"], gather_attrs["hdf5_mode"]) == ("mpio", "gather")
     assert_same_datasets(mpio, gather, f"mpio vs gather on {n} ranks")
-    own = {"hdf5_mode", "command", "created_utc"}
+    own = {"hdf5_mode", "command", "created_utc", "run_id"}
     assert mpio_attrs.keys() == gather_attrs.keys()
     for k in mpio_attrs.keys() - own:
         assert np.array_equal(mpio_attrs[k], gather_attrs[k]), k

@@ -181,9 +181,11 @@ class Output:
         g.attrs["frames_written"] = 0
         rows = max(1, min(max(nf, 1), (1 << 16) // max(ns, 1)))
         for name, (dt_, per_frame, unit) in INTERFACE_DATASETS.items():
-            if per_frame:
+            if per_frame and ns == 0:     # a free block: no interface sites, nothing to grow
+                ds = g.create_dataset(name, shape=(nf, 0), dtype=dt_)
+            elif per_frame:
                 ds = g.create_dataset(name, shape=(nf, ns), maxshape=(None, ns), dtype=dt_,
-                                      chunks=(rows, max(ns, 1)), dcpl=_early())
+                                      chunks=(rows, ns), dcpl=_early())
             elif name == "time":
                 ds = g.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=dt_, chunks=(max(rows, 64),),
                                       dcpl=_early())
@@ -236,7 +238,7 @@ class Output:
             g = f["interface"]
             nf = self.sim.frames_total
             for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
-                if per_frame or name == "time":
+                if (per_frame and self.n_sites) or name == "time":
                     g[name].resize(nf, axis=0)
             if "VTKHDF" in f:
                 for name, shape in self._vtk_shapes(self.sim.snapshots_total).items():

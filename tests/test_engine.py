@@ -1,0 +1,171 @@
+"""The compiled loop against independent computations: the first engine's plain step, a brute-force
+re-bonding search, the interface kernel's reach checks, and the rigid substrate's own limits."""
+import numpy as np
+import pytest
+
+from helpers import SMALL, reference, require, run_cli, scene, simulation, small_toml, datasets
+from parslip.engine.kernels import interface as ik
+from parslip.engine.simulation import Simulation
+from parslip.model.lattice import BOTTOM, TOP
+from parslip.scene.derive import derive
+
+
+def test_fused_step_equals_the_reference_step_while_bonds_break_and_reform():
+    """From the same state, one compiled step and one step of the first engine's per-node kernels
+    (neighbours gathered by index, each bond's force on its own) agree to round-off, and their bonds
+    agree exactly, at every step of a stretch in which bonds break and re-form."""
+    sim = simulation(SMALL)
+    st = sim.setup
+    sim.run(until=st.n_drive_start + int(0.5 * st.n_drive))
+    events = 0
+    worst = 0.0
+    for _ in range(300):
+        ref = reference(sim)
+        before = sim.counters.copy()
+        ref_before = ref.counters.copy()
+        sim.step()
+        ref.step()
+        scale = np.abs(ref.u[:ref.n_owned]).max()
+        worst = max(worst, np.abs(sim.u - ref.u[:ref.n_owned]).max() / scale)
+        np.testing.assert_array_equal(sim.state.owned_partner(), ref.partner[ref.own_sites])
+        assert np.array_equal(sim.counters - before, ref.counters - ref_before)
+        events += int((sim.counters - before).sum())
+    assert events >= 2, events                 # the stretch really had breaks and re-formations
+    assert worst < 1e-13, worst
+
+
+def test_whole_run_matches_the_reference_run():
+    """A whole run of SMALL (about 2,900 steps, 39 breaks) stays within 1e-11 of the reference run."""
+    sim = simulation(SMALL)
+    ref = reference(simulation(SMALL))
+    sim.run()
+    ref.run(until=sim.n)
+    assert np.abs(sim.u - ref.u[:ref.n_owned]).max() < 1e-11 * np.abs(ref.u).max()
+    np.testing.assert_array_equal(sim.counters, ref.counters)
+    np.testing.assert_array_equal(sim.state.owned_partner(), ref.partner[ref.own_sites])
+
+
+# A wide gap under a heavy load: delta0 = 2.5 compressed to about 0.5 by F_N = 2 x 24 x 0.3 = 14.4,
+# so a free node may re-bond to a substrate site up to 2.45 a away in x: two columns off.
+WIDE = {**SMALL, "interface.delta0": 2.5, "interface.delta_b": 2.8, "load.FN": 14.4, "drive.v0": 0.05,
+        "output.snapshots": 0}
+
+
+def _nearest_free(sim, j, taken):
+    """Brute force over every substrate site: the nearest free one within delta0 (ties: lower index)."""
+    s = sim.state
+    bx, by, tx, ty = s.level(sim.n)
+    g = s.iface.geom
+    br = int(g[ik.G_BROW])
+    d0 = sim.setup.scene["interface.delta0"]
+    gcol = j + g[ik.G_TBASE]
+    best, who = np.inf, -1
+    for i in range(int(g[ik.G_BLO]), int(g[ik.G_BHI])):
+        q = i + g[ik.G_BBASE]
+        if taken[i]:
+            continue
+        dx = (gcol - q) + (tx[1, j] - bx[br, i])
+        dy = d0 + (ty[1, j] - by[br, i])
+        d2 = dx * dx + dy * dy
+        if d2 <= d0 * d0 and d2 < best:
+            best, who = d2, q
+    return who
+
+
+def test_wide_gap_rebonds_to_the_nearest_free_site_even_two_columns_away():
+    """The re-bonding window follows delta0: each bond formed is the brute-force nearest free site of
+    the whole substrate row, and some are two or more columns from the node's nearest column."""
+    sim = simulation(WIDE)
+    st = sim.setup
+    assert st.reach.window == 3
+    sim.run(until=st.n_drive_start)
+    far = formed = 0
+    g = sim.state.iface.geom
+    for _ in range(st.n_drive):
+        s = sim.state
+        partner_before = s.iface.partner.copy()
+        _, _, tx, _ = s.level(sim.n)
+        ux = tx[1].copy()
+        sim.step()
+        lo, hi = int(g[ik.G_TLO]), int(g[ik.G_THI])
+        new = [j for j in range(lo, hi) if s.iface.partner[j] >= 0 and s.iface.partner[j] != partner_before[j]]
+        if not new:
+            continue
+        # Recompute the claims at the state the step started from (level n - 1 now holds u(n - 1)).
+        sim.n -= 1
+        taken = np.zeros(int(g[ik.G_BHI]) + 1, bool)
+        for j in range(lo, hi):
+            p = s.iface.partner[j]
+            if p >= 0 and j not in new:
+                taken[p - g[ik.G_BBASE]] = True
+        for j in new:
+            assert s.iface.partner[j] == _nearest_free(sim, j, taken), j
+            taken[s.iface.partner[j] - g[ik.G_BBASE]] = True
+            formed += 1
+            far += abs(s.iface.partner[j] - round(j + g[ik.G_TBASE] + ux[j])) >= 2
+        sim.n += 1
+    assert formed > 10 and far > 0, (formed, far)
+
+
+def test_wide_gap_is_bitwise_identical_on_1_and_3_ranks(tmp_path):
+    require("gather")
+    sc = tmp_path / "wide.toml"
+    sc.write_text(small_toml(**{k: v for k, v in WIDE.items() if k not in SMALL or WIDE[k] != SMALL[k]}))
+    files = {}
+    for n in (1, 3):
+        p = run_cli(n, "run", sc, "--out", tmp_path / f"w{n}.vtkhdf", "--no-png", "--quiet")
+        assert p.returncode == 0, p.stderr
+        files[n] = datasets(tmp_path / f"w{n}.vtkhdf")[0]
+    intact = files[1]["interface/intact"]
+    assert (intact == 0).any() and (np.diff(intact.astype(int), axis=0) > 0).any()   # broke and re-formed
+    for name, ref in files[1].items():
+        assert files[3][name].tobytes() == ref.tobytes(), name
+
+
+def test_a_bond_out_of_reach_is_caught_not_skipped():
+    """An OWNED interface site bonded to a substrate site this rank does not hold: the kernel reports
+    it (and leaves the bond alone) instead of silently skipping its force and its break test."""
+    sim = simulation(SMALL)
+    s = sim.state
+    g = s.iface.geom
+    j = int(g[ik.G_TOWN0]) + 3
+    s.iface.partner[j] = int(g[ik.G_BBASE] + g[ik.G_BHI]) + 5          # beyond the stored substrate columns
+    bx, by, tx, ty = s.level(0)
+    br = int(g[ik.G_BROW])
+    s.iface.reach[0] = -1
+    ik.update(tx[1], ty[1], bx[br], by[br], s.iface.partner, s.iface.x0, s.iface.taken, s.iface.claim, g,
+              s.iface.consts, s.iface.counters, s.iface.reach, s.iface.ext_x, s.iface.ext_y, s.iface.exb_x,
+              s.iface.exb_y)
+    assert s.iface.reach[0] == j + g[ik.G_TBASE]
+
+
+def test_rigid_substrate_static_gap_and_no_substrate_nodes():
+    """Rigid: at rest the springs carry the whole load, sum_i k_y (delta0 - gap_i) = F_N, so the mean gap
+    is delta0 - F_N/(N k_y); the lattice holds the block only, and omega_max (dt) comes from the block
+    and the springs."""
+    FN, N, ky = 2.0, 24, 0.3
+    sim = simulation(SMALL, **{"lattice.substrate": "rigid", "drive.mode": "none", "load.FN": FN,
+                               "load.settle": 30.0, "drive.duration": 0.01})
+    st = sim.setup
+    assert st.lattice.n_nodes == 4 * 24 and (sim.state.own_block == TOP).all()
+    sim.run(until=st.n_drive_start)
+    _, _, tx, ty = sim.state.level(sim.n)
+    s = sim.state.owned_sites()
+    gaps = 0.5 + ty[1, s]
+    assert gaps.mean() == pytest.approx(0.5 - FN / (N * ky), abs=1e-10)
+    assert np.abs(sim.u - sim.u_prev).max() / st.dt < 1e-10               # at rest
+    elastic = derive(scene(**SMALL))
+    assert st.dt_limit > 4 * elastic.dt_limit           # no stiff substrate: a much longer time step
+
+
+def test_rigid_substrate_is_the_stiff_limit():
+    """k_n -> infinity: the first break of SMALL's push moves toward the rigid result as k_n grows."""
+    def first_break(**over):
+        sim = simulation(SMALL, **{"output.snapshots": 0, **over})
+        st = sim.setup
+        while sim.n < st.n_steps and sim.counters[0] == 0:
+            sim.run(until=min(st.n_steps, sim.n + 50))
+        return st.to_lcr((sim.n - st.n_drive_start) * st.dt)
+    rigid = first_break(**{"lattice.substrate": "rigid"})
+    errs = [abs(first_break(**{"material.bottom_kn": k}) - rigid) for k in (100.0, 1e3, 1e4)]
+    assert errs[0] > errs[2] and errs[2] < 0.02 * rigid, (errs, rigid)
