@@ -4,7 +4,7 @@ The prediction adds up, for each rank, the arrays the run holds for its
 whole life (from the rank's ``parallel.layout``, exactly), the arrays a
 snapshot needs while it is written, and the process itself:
 
-    peak = BASE + persistent + max(snapshot transient, omega_max transient)
+    peak = BASE + persistent + max(set-up transient, snapshot transient, omega_max transient)
 
 - persistent: the state (two Verlet levels of x and y per block, with ghost
   cells and halo columns, and the drive's reference), the owned-node index
@@ -16,6 +16,9 @@ snapshot needs while it is written, and the process itself:
   gathering writer, rank 0 also holds one gathered field of every rank at a
   time (the connectivity: 48 B per node of the whole lattice, twice while it
   is unpickled);
+- set-up transient: sorting the owned nodes into global order and building
+  the writer's bond cells (a few hundred columns at a time): about 100 B
+  per node, measured;
 - omega_max (rank 0, lattices up to 60,000 degrees of freedom): the sparse
   stiffness and its Lanczos vectors, about 1.2 kB per node;
 - BASE: Python with NumPy, SciPy, numba, h5py, mpi4py and the compiled loop
@@ -26,11 +29,12 @@ from __future__ import annotations
 
 import numpy as np
 
-BASE = 215 << 20
+BASE = 200 << 20
 INDEX_BYTES = 64
 CELL_BYTES = 48
 SNAPSHOT_BYTES = 152
 GATHER_BYTES = 96
+SETUP_BYTES = 100
 OMEGA_BYTES = 1200
 
 
@@ -56,7 +60,7 @@ def predict(setup, ranks: int, gather: bool = True) -> dict:
         if rank == 0 and gather and snapshots and ranks > 1:
             transient += lat.n_nodes * GATHER_BYTES
         omega = lat.n_nodes * OMEGA_BYTES if rank == 0 and 2 * lat.n_nodes <= LANCZOS_MAX_DOFS else 0
-        per_rank.append(BASE + persistent + max(transient, omega))
+        per_rank.append(BASE + persistent + max(transient, omega, owned * SETUP_BYTES))
     n = max(lat.n_nodes, 1)
     return {"per_rank": per_rank, "total": sum(per_rank),
             "bytes_per_node": (sum(per_rank) - ranks * BASE) / n}

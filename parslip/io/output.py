@@ -53,6 +53,19 @@ def hdf5_mode(size: int, comm=None) -> str:
     return "mpio" if (size > 1 or comm is not None) and h5py.get_config().mpi else "gather"
 
 
+def _bulk_cells(lat, c0: int, c1: int, chunk: int = 512) -> np.ndarray:
+    """[cells, 2] global ids of the bulk bonds 0..2 (each bond once) of the nodes in columns [c0, c1).
+
+    Built a few hundred columns at a time, so the temporaries stay small whatever the lattice."""
+    parts = []
+    for a in range(c0, c1, chunk):
+        nodes = lat.nodes_in_columns(a, min(a + chunk, c1))
+        nbr = lat.neighbour_gids(nodes)[:, :3]
+        has = nbr >= 0
+        parts.append(np.stack([np.repeat(nodes["gid"][:, None], 3, 1)[has], nbr[has]], axis=1))
+    return np.concatenate(parts).astype(np.int64) if parts else np.zeros((0, 2), np.int64)
+
+
 def _early():
     """Dataset creation: every chunk allocated when the dataset is (or grows), never filled.
 
@@ -84,11 +97,7 @@ class Output:
         self.node0 = int(state.gid[0]) if state.n_owned else 0
         self.site0 = state.site0() if lat.has_interface else 0
         c0, c1 = lay.col_range
-        nodes = lat.nodes_in_columns(c0, c1)
-        nbr = lat.neighbour_gids(nodes)[:, :3]           # bonds 0..2: each bulk bond once
-        has = nbr >= 0
-        self.bulk_cells = np.stack([np.repeat(nodes["gid"][:, None], 3, 1)[has], nbr[has]],
-                                   axis=1).astype(np.int64)
+        self.bulk_cells = _bulk_cells(lat, c0, c1)
         counts = self._allgather(len(self.bulk_cells))
         self.cell0 = int(sum(counts[:self.rank]))
         self.n_bulk_cells = int(sum(counts))
