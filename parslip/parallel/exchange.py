@@ -74,51 +74,50 @@ def build_plan(layout, dtype, comm=None) -> Plan:
                 rflags=np.zeros(8, np.int64))
 
 
-@njit(cache=True, _nrt=False)
-def _pack(plan, i, bx, by, tx, ty, partner, x0):
-    buf = plan.sbuf
-    k = plan.sb_ptr[i]
-    for g in range(plan.ss_ptr[i], plan.ss_ptr[i + 1]):
-        b, r, j0, n = plan.ss[g, 0], plan.ss[g, 1], plan.ss[g, 2], plan.ss[g, 3]
-        ax = bx if b == 0 else tx
-        ay = by if b == 0 else ty
+@njit(cache=True, _nrt=False, inline="always")
+def _move(buf, k, a, r, j0, n, out):
+    """n values of row r of ``a`` from column j0 into ``buf`` at k (``out``), or back; returns k + n."""
+    if out:
         for j in range(n):
-            buf[k + j] = ax[r, j0 + j]
-        k += n
+            buf[k + j] = a[r, j0 + j]
+    else:
         for j in range(n):
-            buf[k + j] = ay[r, j0 + j]
-        k += n
-    for g in range(plan.sts_ptr[i], plan.sts_ptr[i + 1]):
-        j0, n = plan.sts[g, 0], plan.sts[g, 1]
-        for j in range(n):
-            buf[k + j] = partner[j0 + j]
-        k += n
-        for j in range(n):
-            buf[k + j] = x0[j0 + j]
-        k += n
+            a[r, j0 + j] = buf[k + j]
+    return k + n
 
 
 @njit(cache=True, _nrt=False)
-def _unpack(plan, i, bx, by, tx, ty, partner, x0):
-    buf = plan.rbuf
-    k = plan.rb_ptr[i]
-    for g in range(plan.rs_ptr[i], plan.rs_ptr[i + 1]):
-        b, r, j0, n = plan.rs[g, 0], plan.rs[g, 1], plan.rs[g, 2], plan.rs[g, 3]
-        ax = bx if b == 0 else tx
-        ay = by if b == 0 else ty
-        for j in range(n):
-            ax[r, j0 + j] = buf[k + j]
+def _transfer(plan, i, bx, by, tx, ty, partner, x0, out):
+    """Peer i's message: pack my OWNED values into the send buffer (``out``), or unpack its values
+    into my HALO copies: every row segment's x then y, then the interface sites' partner then x0."""
+    if out:
+        buf, k, segs, lo, hi = plan.sbuf, plan.sb_ptr[i], plan.ss, plan.ss_ptr[i], plan.ss_ptr[i + 1]
+        sites, slo, shi = plan.sts, plan.sts_ptr[i], plan.sts_ptr[i + 1]
+    else:
+        buf, k, segs, lo, hi = plan.rbuf, plan.rb_ptr[i], plan.rs, plan.rs_ptr[i], plan.rs_ptr[i + 1]
+        sites, slo, shi = plan.rts, plan.rts_ptr[i], plan.rts_ptr[i + 1]
+    for g in range(lo, hi):
+        b, r, j0, n = segs[g, 0], segs[g, 1], segs[g, 2], segs[g, 3]
+        if b == 0:
+            k = _move(buf, k, bx, r, j0, n, out)
+            k = _move(buf, k, by, r, j0, n, out)
+        else:
+            k = _move(buf, k, tx, r, j0, n, out)
+            k = _move(buf, k, ty, r, j0, n, out)
+    for g in range(slo, shi):
+        j0, n = sites[g, 0], sites[g, 1]
+        if out:
+            for j in range(n):
+                buf[k + j] = partner[j0 + j]
+        else:
+            for j in range(n):
+                partner[j0 + j] = np.int64(buf[k + j])
         k += n
         for j in range(n):
-            ay[r, j0 + j] = buf[k + j]
-        k += n
-    for g in range(plan.rts_ptr[i], plan.rts_ptr[i + 1]):
-        j0, n = plan.rts[g, 0], plan.rts[g, 1]
-        for j in range(n):
-            partner[j0 + j] = np.int64(buf[k + j])
-        k += n
-        for j in range(n):
-            x0[j0 + j] = buf[k + j]
+            if out:
+                buf[k + j] = x0[j0 + j]
+            else:
+                x0[j0 + j] = buf[k + j]
         k += n
 
 
@@ -154,12 +153,12 @@ def exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
             err |= mpi.irecv(plan.rbuf.ctypes.data + plan.rb_ptr[i] * fsz, np.int32(n), ftype,
                              np.int32(plan.peer[i]), np.int32(TAG), comm, rq + i * isz)
         for i in range(npeer):
-            _pack(plan, i, bx, by, tx, ty, partner, x0)
+            _transfer(plan, i, bx, by, tx, ty, partner, x0, True)
             n = plan.sb_ptr[i + 1] - plan.sb_ptr[i]
             err |= mpi.isend(plan.sbuf.ctypes.data + plan.sb_ptr[i] * fsz, np.int32(n), ftype,
                              np.int32(plan.peer[i]), np.int32(TAG), comm, rq + (npeer + i) * isz)
     else:
         err |= mpi.waitall(np.int32(2 * npeer), rq, plan.status.ctypes.data)
         for i in range(npeer):
-            _unpack(plan, i, bx, by, tx, ty, partner, x0)
+            _transfer(plan, i, bx, by, tx, ty, partner, x0, False)
     return err

@@ -29,6 +29,25 @@ def _nbr(k, r, c, s):
     return r - 1, c + s
 
 
+@njit(cache=True, inline="always")
+def _bond_diffs(bx, by, tx, ty, geo, b, r, c, kmax, d):
+    """u_j - u_i (float64) of node (b, r, c)'s bonds 0..kmax-1 into d[k], and whether each bond exists."""
+    if b == 0:
+        ax, ay = bx, by
+    else:
+        ax, ay = tx, ty
+    rlo, rhi, jlo, jhi, par = geo[b, 0], geo[b, 1], geo[b, 2], geo[b, 3], geo[b, 4]
+    s = (r - rlo + par) % 2
+    for k in range(kmax):
+        rr, cc = _nbr(k, r, c, s)
+        if rr < rlo or rr >= rhi or cc < jlo or cc >= jhi:
+            d[k, 2] = 0.0
+            continue
+        d[k, 0] = float(ax[rr, cc]) - float(ax[r, c])
+        d[k, 1] = float(ay[rr, cc]) - float(ay[r, c])
+        d[k, 2] = 1.0
+
+
 @njit(cache=True)
 def node_stress(bx, by, tx, ty, blk, row, col, geo, kk, dirs, scale, out):
     """Virial stress of each listed node, sigma_ab = sum_j f_a n_b a / (2 Omega), times ``scale``.
@@ -37,30 +56,21 @@ def node_stress(bx, by, tx, ty, blk, row, col, geo, kk, dirs, scale, out):
     ``scale`` = 1/(2 Omega rho c_r^2) = 1/(2 c_r^2) gives rho c_r^2.  out[:, 0..2] = sxx, syy, sxy,
     where sxy = sum f_x n_y is the x-traction on horizontal planes (the Born stress is not symmetric).
     """
+    d = np.zeros((6, 3))
     for m in range(blk.shape[0]):
-        b, r, c = blk[m], row[m], col[m]
-        if b == 0:
-            ax, ay = bx, by
-        else:
-            ax, ay = tx, ty
-        rlo, rhi, jlo, jhi, par = geo[b, 0], geo[b, 1], geo[b, 2], geo[b, 3], geo[b, 4]
-        s = (r - rlo + par) % 2
+        b = blk[m]
+        _bond_diffs(bx, by, tx, ty, geo, b, row[m], col[m], 6, d)
         kn, kt = kk[b, 0], kk[b, 1]
-        kd = kn - kt
-        ux, uy = float(ax[r, c]), float(ay[r, c])
         sxx = 0.0
         syy = 0.0
         sxy = 0.0
         for k in range(6):
-            rr, cc = _nbr(k, r, c, s)
-            if rr < rlo or rr >= rhi or cc < jlo or cc >= jhi:
+            if d[k, 2] == 0.0:
                 continue
             nx, ny = dirs[k, 0], dirs[k, 1]
-            dx = float(ax[rr, cc]) - ux
-            dy = float(ay[rr, cc]) - uy
-            p = kd * (dx * nx + dy * ny)
-            fx = p * nx + kt * dx
-            fy = p * ny + kt * dy
+            p = (kn - kt) * (d[k, 0] * nx + d[k, 1] * ny)
+            fx = p * nx + kt * d[k, 0]
+            fy = p * ny + kt * d[k, 1]
             sxx += fx * nx
             syy += fy * ny
             sxy += fx * ny
@@ -73,22 +83,16 @@ def node_stress(bx, by, tx, ty, blk, row, col, geo, kk, dirs, scale, out):
 def bond_energy(bx, by, tx, ty, blk, row, col, geo, kk, dirs, out):
     """Energy of each listed node's bonds 0..2 (each bulk bond counted once), in m c^2:
     1/2 [k_n (du.n)^2 + k_t (|du|^2 - (du.n)^2)]."""
+    d = np.zeros((3, 3))
     for m in range(blk.shape[0]):
-        b, r, c = blk[m], row[m], col[m]
-        if b == 0:
-            ax, ay = bx, by
-        else:
-            ax, ay = tx, ty
-        rlo, rhi, jlo, jhi, par = geo[b, 0], geo[b, 1], geo[b, 2], geo[b, 3], geo[b, 4]
-        s = (r - rlo + par) % 2
+        b = blk[m]
+        _bond_diffs(bx, by, tx, ty, geo, b, row[m], col[m], 3, d)
         kn, kt = kk[b, 0], kk[b, 1]
         e = 0.0
         for k in range(3):
-            rr, cc = _nbr(k, r, c, s)
-            if rr < rlo or rr >= rhi or cc < jlo or cc >= jhi:
+            if d[k, 2] == 0.0:
                 continue
-            dx = float(ax[rr, cc]) - float(ax[r, c])
-            dy = float(ay[rr, cc]) - float(ay[r, c])
+            dx, dy = d[k, 0], d[k, 1]
             dn = dx * dirs[k, 0] + dy * dirs[k, 1]
             e += 0.5 * (kn * dn * dn + kt * (dx * dx + dy * dy - dn * dn))
         out[m] = e

@@ -49,6 +49,16 @@ K_N, K_T, K_A, K_B, K_C, K_DAMP = range(6)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt, a, b, c):
+    """C F of an interior node: each bond's difference first, then the pairs that share a stiffness."""
+    hx, hy = (xm - ux) + (xp - ux), (ym - uy) + (yp - uy)
+    qpx, qpy = (xur - ux) + (xdl - ux), (yur - uy) + (ydl - uy)
+    qqx, qqy = (xul - ux) + (xdr - ux), (yul - uy) + (ydr - uy)
+    return (kn * hx + a * (qpx + qqx) + b * (qpy - qqy),
+            kt * hy + b * (qpx - qqx) + c * (qpy + qqy))
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def row_full(cx, cy, px, py, r, j0, n, s, K, blk, damped):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py."""
     kn, kt, a, b, c, bb = K[blk, 0], K[blk, 1], K[blk, 2], K[blk, 3], K[blk, 4], K[blk, 5]
@@ -59,24 +69,19 @@ def row_full(cx, cy, px, py, r, j0, n, s, K, blk, damped):
     xdl, xdr = cx[r - 1, j0 - 1 + s:j0 - 1 + s + n], cx[r - 1, j0 + s:j0 + s + n]
     ydl, ydr = cy[r - 1, j0 - 1 + s:j0 - 1 + s + n], cy[r - 1, j0 + s:j0 + s + n]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
+    # Two copies of the loop, so neither holds a branch: with zeta = 0 the damping factor is skipped.
     if damped:
         for k in range(n):
             ux, uy = x0[k], y0[k]
-            hx, hy = (xm[k] - ux) + (xp[k] - ux), (ym[k] - uy) + (yp[k] - uy)
-            qpx, qpy = (xur[k] - ux) + (xdl[k] - ux), (yur[k] - uy) + (ydl[k] - uy)
-            qqx, qqy = (xul[k] - ux) + (xdr[k] - ux), (yul[k] - uy) + (ydr[k] - uy)
-            fx = kn * hx + a * (qpx + qqx) + b * (qpy - qqy)
-            fy = kt * hy + b * (qpx - qqx) + c * (qpy + qqy)
+            fx, fy = _full(ux, uy, xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k], ydl[k],
+                           yul[k], ydr[k], kn, kt, a, b, c)
             ox[k] = ux + (bb * (ux - ox[k]) + fx)
             oy[k] = uy + (bb * (uy - oy[k]) + fy)
     else:
         for k in range(n):
             ux, uy = x0[k], y0[k]
-            hx, hy = (xm[k] - ux) + (xp[k] - ux), (ym[k] - uy) + (yp[k] - uy)
-            qpx, qpy = (xur[k] - ux) + (xdl[k] - ux), (yur[k] - uy) + (ydl[k] - uy)
-            qqx, qqy = (xul[k] - ux) + (xdr[k] - ux), (yul[k] - uy) + (ydr[k] - uy)
-            fx = kn * hx + a * (qpx + qqx) + b * (qpy - qqy)
-            fy = kt * hy + b * (qpx - qqx) + c * (qpy + qqy)
+            fx, fy = _full(ux, uy, xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k], ydl[k],
+                           yul[k], ydr[k], kn, kt, a, b, c)
             ox[k] = ux + ((ux - ox[k]) + fx)
             oy[k] = uy + ((uy - oy[k]) + fy)
 
