@@ -298,9 +298,12 @@ class Simulation:
             raise NonFiniteError(self._describe_node(first, t))
         if bits & L.FLAG_REACH:
             slip = max(self._gather(self.state.max_top_slip(self.n)))
+            col = int(first[L.L_COL])
+            what = (f"the bond or re-bonding window of the interface site at column {col} reached past the substrate "
+                    f"sites its rank holds" if col >= 0 else "the halo no longer covered the interface's reach")
             raise SlipReachError(
-                f"interface slip reached {slip:.3g} a at step {step} (t = {t:.4g} l/c_r), beyond interface.slip_reach "
-                f"= {st.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
+                f"interface slip reached {slip:.3g} a at step {step} (t = {t:.4g} l/c_r): {what}, beyond "
+                f"interface.slip_reach = {st.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
                 f"interface.slip_reach={max(2 * slip, st.slip_reach + 2):.3g}")
         if bits & L.FLAG_DRIFT:
             raise NonFiniteError(
