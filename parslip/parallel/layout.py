@@ -62,7 +62,8 @@ ALL_BONDS = 0b111111
 # Row segments up to this many nodes run node by node (a vectorised loop's set-up costs more).
 SHORT = 4
 
-# Measured cost of one column, in node updates (benchmarks/bench_loop.py):
+# Measured cost of one column, in node updates (the phase times of `parslip bench`: the interface phase
+# over the stencil phase, per site and per node):
 # a bulk node costs 1; each interface site adds the bond update and the
 # re-bonding logic, which costs about SITE_COST node updates per step.
 SITE_COST = 12.0
