@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from ..parallel.exchange import COMPLETE, POST, PROGRESS, REDUCE, exchange
-from ..parallel.layout import FULL, NO_DOWN, PAD
+from ..parallel.layout import ALL_BONDS, FULL, NO_DOWN, PAD
 from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
@@ -111,9 +111,12 @@ def _nodes(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, drive0, drive_on, shift
     for t in range(t0, t1):
         b, r, j, mask, extra, load, drive, s = (tasks[t, 0], tasks[t, 1], tasks[t, 2], tasks[t, 5], tasks[t, 6],
                                                 tasks[t, 7], tasks[t, 8], tasks[t, 10])
-        fx = ex[j] if extra else zero
-        fy = (ey[j] if extra else zero) + (gy if load else zero)
-        node_masked(cx, cy, px, py, r, j, s, K, b, damped, mask, cf, fx, fy)
+        if mask == ALL_BONDS and not extra and not load:
+            row_full(cx, cy, px, py, r, j, 1, s, K, b, damped)   # an interior node cut off by a slab edge
+        else:
+            fx = ex[j] if extra else zero
+            fy = (ey[j] if extra else zero) + (gy if load else zero)
+            node_masked(cx, cy, px, py, r, j, s, K, b, damped, mask, cf, fx, fy)
         if drive and drive_on:
             px[r, j] = drive0[r, j] + shift
 
