@@ -16,6 +16,9 @@ from ..errors import NonFiniteError, SlipReachError
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, task_ranges
+# RUNAWAY_JUMP (a): a node that moves this far in one step is running away.  It lives with the scene
+# limits, which refuse a drive that would move its face that far per step by prescription.
+from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
 from .state import State
 
@@ -23,8 +26,6 @@ from .state import State
 CHUNK_UPDATES = 2e8
 # Interface frames held in memory before a block is written.
 FRAME_BUFFER_BYTES = 8 << 20
-# A node that moves this far in one step (a) is running away: faster than any wave in the lattice.
-RUNAWAY_JUMP = 0.5
 # Steps between checks of the owned state and the agreement of all ranks on whether to stop.
 CHECK_EVERY = 256
 
