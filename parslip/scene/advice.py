@@ -26,6 +26,15 @@ Fast drive, v0 > 0.1 c_r:
     by inertia, not quasi-statically as in the paper's v0 <= 1e-2 c_r.  The
     limit of what can be served at all (v0 < c) is in ``scene.limits``.
 
+Heavy normal load, F_N > 1/2 N k_y delta0:
+    the limit ``scene.limits`` sets is on the mean gap at rest, delta0 -
+    F_N/(N k_y).  Single gaps spread about it: with an even number of rows
+    the block's loaded top row sits half a spacing ahead of its interface
+    row (alternating row offsets), so the load tilts it and its front sinks
+    most (24 sites, 4 rows: at 0.99 of the limit the front gap is -0.09 a
+    while the mean is +0.005 a).  Above half the limit parts of the
+    interface may close before the mean does.
+
 Short drive, v0 T < sqrt(delta_b^2 - delta0^2):
     the driven face moves v0 T over the drive time T; an interface bond at
     rest (gap delta0, less under load) breaks only once its top node has
@@ -38,10 +47,12 @@ from __future__ import annotations
 import math
 
 from ..model.physics import ROW_HEIGHT
-from .limits import drive_wave
+from .limits import closing_load, drive_wave
 
 # v0 in c_r above which the drive counts as fast: ten times the paper's fastest drive (1e-2 c_r).
 FAST_DRIVE = 0.1
+# Share of the closing load N k_y delta0 above which single interface gaps may close.
+HEAVY_LOAD = 0.5
 
 
 def block_height(setup) -> float:
@@ -62,6 +73,13 @@ def warnings(setup) -> list[str]:
             f"die before they reach the interface, stress diffuses across H in about zeta H^2/c_s^2 = "
             f"{zeta * h * h / mat.c_s ** 2:.3g} a/c and the block is frozen; for a dynamic block use "
             f"time.zeta < c_s/H = {mat.c_s / h:.3g}")
+    if st.lattice.has_interface and s["load.FN"] > HEAVY_LOAD * closing_load(s):
+        close = closing_load(s)
+        gap = s["interface.delta0"] * (1 - s["load.FN"] / close)
+        out.append(
+            f"load.FN = {s['load.FN']:g}: {s['load.FN'] / close:.0%} of the load that closes the mean gap "
+            f"(N k_y delta0 = {close:.4g}); the mean gap at rest is {gap:.3g} a but single gaps spread about "
+            f"it (the block tilts under its alternating row offsets), so parts of the interface may close")
     mode = s["drive.mode"]
     if mode != "none":
         v0 = s["drive.v0"]
