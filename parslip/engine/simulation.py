@@ -316,11 +316,11 @@ class Simulation:
         B = lat.blocks[b]
         gid = int(lat.gid(b, r, c))
         x, y = c + float(B.offset(r)), B.y0 + r * np.sqrt(3) / 2
-        where = (f"at node {gid} ({'top' if b == TOP else 'bottom'} block, row {r}, column {c}, x = {x:.4g} a, "
-                 f"y = {y:.4g} a)")
+        node = (f"node {gid} ({'top' if b == TOP else 'bottom'} block, row {r}, column {c}, x = {x:.4g} a, "
+                f"y = {y:.4g} a)")
         if f[L.L_BITS] & L.FLAG_NONFINITE:
-            return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) {where}; "
+            return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) at {node}; "
                     f"likely cause: a time step above the stability limit; try a smaller time.safety")
-        return (f"state grew without bound: at step {step} (t = {t:.4g} l/c_r from drive start) the node {where} "
+        return (f"state grew without bound: at step {step} (t = {t:.4g} l/c_r from drive start) the {node} "
                 f"moved {f[L.L_VALUE] / 1e6:.3g} a in one step (faster than any wave of the lattice); likely cause: "
                 f"a time step above the stability limit (try a smaller time.safety); output written so far is kept")
