@@ -447,7 +447,6 @@ def test_runaway_stops_early_through_the_command_line_and_keeps_a_readable_file(
     bound; the health check stops the run within 256 steps with exit code 3, naming the step, the node
     and the likely cause, and the file keeps status 'failed: ...' and the frames written before it."""
     from parslip.io import cache
-    from parslip.model.lattice import Lattice
     monkeypatch.setenv("PARSLIP_CACHE_DIR", str(tmp_path / "cache"))
     over = {"load.FN": 0.0, "load.ramp": 0.0, "load.settle": 0.0, "drive.duration": 3.0, "output.snapshots": 0}
     st = derive(scene(**{**SMALL, **over}))                  # computes the true value (and caches it)

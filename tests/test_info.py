@@ -115,7 +115,7 @@ def test_info_memory_and_cost_agree_with_predict_and_the_steps(capsys, tmp_path,
     assert f"({st.lattice.n_nodes} nodes x {st.n_steps} steps)" in cost
     assert float(cost.split()[0]) == pytest.approx(st.lattice.n_nodes * st.n_steps, rel=1e-3)
     wall = st.lattice.n_nodes * st.n_steps / (budget.THROUGHPUT["float64"] * ranks)
-    assert f"about {wall:.3g} s on {ranks} rank(s) at 600 M node-updates/s per rank (float64" in cost
+    assert f"about {wall:.3g} s of time loop on {ranks} rank(s) at 600 M node-updates/s per rank (float64" in cost
     mem = predict(st, ranks)
     big, total = _mib(sec["memory"][0])[:2]
     assert big == pytest.approx(max(mem["per_rank"]) / 2 ** 20, abs=0.051)

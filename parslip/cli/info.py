@@ -89,8 +89,8 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
     ups = budget.node_updates(st)
     rate = budget.THROUGHPUT[st.precision]
     out.append(_line("cost", f"{ups:.4g} node-updates ({n} nodes x {st.n_steps} steps): about "
-                             f"{_duration(budget.wall_seconds(st, ranks))} on {ranks} rank(s) at "
-                             f"{rate / 1e6:.0f} M node-updates/s per rank ({st.precision}, parslip bench)"))
+                             f"{_duration(budget.wall_seconds(st, ranks))} of time loop on {ranks} rank(s) at "
+                             f"{rate / 1e6:.0f} M node-updates/s per rank ({st.precision}, measured by parslip bench)"))
     mem = predict(st, ranks)
     big = max(range(ranks), key=lambda r: mem["per_rank"][r])
     out.append(_line("memory", f"{_mib(mem['per_rank'][big])} on the largest rank (rank {big}), "

@@ -56,7 +56,8 @@ def _parser() -> argparse.ArgumentParser:
                         "stops cleanly, printing the command that continues it")
     r.add_argument("--no-png", action="store_true", help="skip the space-time PNG")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
-    i = sub.add_parser("info", help="derived quantities, cost, memory, output size, what is left out, warnings", epilog=UNITS_HELP,
+    i = sub.add_parser("info", help="derived quantities, cost, memory, output size, what is left out, warnings",
+                       epilog=UNITS_HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     i.add_argument("scene")
     i.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
