@@ -17,7 +17,7 @@ from helpers import SMALL, row_nodes, scene, simulation, small_toml
 from parslip.cli import main
 from parslip.model.lattice import BOTTOM, TOP
 from parslip.model.physics import DENSITY, ROW_HEIGHT
-from parslip.model.stability import stiffness_matrix
+from parslip.model.stability import bulk_omega2, stiffness_matrix
 from parslip.scene.derive import derive
 
 # No load, no drive, no breaking: the lattice is the linear system of the assembled stiffness.
@@ -73,6 +73,7 @@ def test_stiff_substrate_time_step_follows_the_infinite_lattice_and_the_cost_gro
         line = next(x for x in out.splitlines() if x.startswith("cost"))
         cost[kn] = float(line.split()[1])
         assert cost[kn] == pytest.approx(st.lattice.n_nodes * st.n_steps, rel=1e-3)
+    assert bulk_omega2(1e4, 0.0) == pytest.approx(6e4, rel=1e-9)        # the infinite lattice's maximum
     assert dts[1e4] / dts[100.0] == pytest.approx(0.1, rel=0.01)
     assert dts[1e3] / dts[100.0] == pytest.approx(math.sqrt(0.1), rel=0.01)
     assert cost[1e4] / cost[100.0] == pytest.approx(10.0, rel=0.02)
@@ -95,9 +96,12 @@ def test_every_mode_decays_as_the_damped_oscillator_for_any_zeta(zeta):
     w2, V = np.linalg.eigh(K[free][:, free].toarray())
     assert np.sqrt(w2[-1]) == pytest.approx(st.omega_max, rel=1e-9)
     dt, c = st.dt, 0.5 * zeta * st.dt
-    # The amplification factor of every mode of this lattice.
+    # The amplification factor of every mode of this lattice, and of any 0 < omega dt < 2 at this zeta
+    # (omega = 0, a free translation, keeps its root 1: it has nothing to decay to).
     radius = max(np.abs(np.roots([1 + c, -(2 - dt * dt * w), 1 - c])).max() for w in w2)
     assert radius < 1 if zeta > 0 else radius == pytest.approx(1.0, abs=1e-12)
+    if zeta > 0:
+        assert all(np.abs(np.roots([1 + c, -(2 - x * x), 1 - c])).max() < 1 for x in np.linspace(1e-3, 1.999, 400))
     A = 1e-3
     for mode in (-1, 0):
         phi = np.zeros(K.shape[0])
