@@ -56,10 +56,13 @@ def _parser() -> argparse.ArgumentParser:
                         "stops cleanly, printing the command that continues it")
     r.add_argument("--no-png", action="store_true", help="skip the space-time PNG")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
-    i = sub.add_parser("info", help="derived quantities, memory and output size of a scene", epilog=UNITS_HELP,
+    i = sub.add_parser("info", help="derived quantities, cost, memory, output size, what is left out, warnings",
+                       epilog=UNITS_HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     i.add_argument("scene")
     i.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    i.add_argument("--ranks", type=int, default=1, metavar="N",
+                   help="rank count the memory and wall-time estimates are for (default 1)")
     sub.add_parser("keys", help="every scene key with default, units and accepted range")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
@@ -115,37 +118,8 @@ def _out_path(args, must_exist: bool = False, may_exist: bool = False) -> str:
 
 
 def cmd_info(args) -> int:
-    from ..scene.derive import derive
-    scene = load(args.scene, args.set)
-    st = derive(scene)
-    lat, mat = st.lattice, st.material
-    n = lat.n_nodes
-    bytes_node = 150
-    frames, sites = st.n_frames, lat.n_top_sites
-    cells = 3 * n + sites
-    out_bytes = frames * sites * 21 + st.n_snapshots * (n * 64 + cells * 28)
-    print(f"scene            {args.scene}")
-    print(f"lattice          top {lat.top.rows} x {lat.top.cols}, bottom {lat.bottom.rows} x {lat.bottom.cols}: "
-          f"{n} nodes, contact l = {st.l:g} a")
-    print(f"top block        nu = {mat.nu} ({mat.model}): k_n = {mat.kn_top:.6g}, k_t = {mat.kt_top:.6g}")
-    print(f"substrate        k_n = {mat.kn_bottom:.6g}, k_t = {mat.kt_bottom:.6g}, c_l = {mat.c_l_bottom:.6g}")
-    print(f"wave speeds      c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})")
-    print(f"Rayleigh speed   c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)")
-    print(f"surface wave     {mat.c_surface_born:.6g} = {mat.c_surface_born / mat.c_s:.5f} c_s "
-          "(the Born lattice's own: k_t resists rotation)")
-    print(f"stability        omega_max = {st.omega_max:.6g} ({st.omega_method}): dt < 2/omega_max = {st.dt_limit:.6g}  |  "
-          f"paper's dt < a/c_l = {st.dt_paper:.6g} (not enough for the stiff substrate)")
-    print(f"time step        dt = {st.dt:.6g} a/c ({st.dt / st.dt_limit:.3f} of the limit)")
-    print(f"steps            ramp {st.n_ramp} + settle {st.n_settle} + drive {st.n_drive} = {st.n_steps}"
-          f"  (l/c_r = {st.t_unit / st.dt:.1f} steps)")
-    print(f"output           {frames} interface frames (every {st.frame_every} steps), "
-          f"{st.n_snapshots} snapshots, about {out_bytes / 2**20:.1f} MiB")
-    print(f"memory           about {n * bytes_node / 2**20:.1f} MiB of state on one rank "
-          f"(+ about {n * 400 / 2**20:.0f} MiB on rank 0 while it finds omega_max)")
-    r = st.reach
-    print(f"ranks            1 to {st.max_ranks()} (slabs of whole columns; interface halos of {r.top_site} and "
-          f"{r.bottom_site} columns serve a slip reach of {st.slip_reach:.3g} a, across as many slabs as needed)")
-    return 0
+    from .info import cmd_info as info
+    return info(args)
 
 
 def cmd_run(args) -> int:

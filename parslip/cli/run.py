@@ -183,6 +183,7 @@ def cmd_run(args, comm, bcast, load, out_path) -> int:
     from ..io import checkpoint as ck
     from ..io.output import Output, git_commit
     from ..io.writer_mode import writer_line
+    from ..scene import advice
     from ..scene.derive import derive
     from ..scene.schema import to_toml
     from .progress import Progress, setup_logging
@@ -211,6 +212,8 @@ def cmd_run(args, comm, bcast, load, out_path) -> int:
                        "command": " ".join(sys.argv), "run_id": run_id} if rank == 0 else None, root=0)
     writer = Output(out, sim, comm, prov, resume=run_id if ckpt_in else None)
     log.info(writer_line(writer.mode))
+    for line in (advice.warnings(st) if rank == 0 else ()):
+        log.warning(line)
     log.info(f"{args.scene}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
              f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {out}"
              + (f"; continuing from step {sim.n} ({ckpt_in})" if ckpt_in else ""))

@@ -16,6 +16,9 @@ from ..errors import NonFiniteError, SlipReachError
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, task_ranges
+# RUNAWAY_JUMP (a): a node that moves this far in one step is running away.  It lives with the scene
+# limits, which refuse a drive that would move its face that far per step by prescription.
+from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
 from .state import State
 
@@ -23,8 +26,6 @@ from .state import State
 CHUNK_UPDATES = 2e8
 # Interface frames held in memory before a block is written.
 FRAME_BUFFER_BYTES = 8 << 20
-# A node that moves this far in one step (a) is running away: faster than any wave in the lattice.
-RUNAWAY_JUMP = 0.5
 # Steps between checks of the owned state and the agreement of all ranks on whether to stop.
 CHECK_EVERY = 256
 
@@ -318,11 +319,11 @@ class Simulation:
         B = lat.blocks[b]
         gid = int(lat.gid(b, r, c))
         x, y = c + float(B.offset(r)), B.y0 + r * np.sqrt(3) / 2
-        where = (f"at node {gid} ({'top' if b == TOP else 'bottom'} block, row {r}, column {c}, x = {x:.4g} a, "
-                 f"y = {y:.4g} a)")
+        node = (f"node {gid} ({'top' if b == TOP else 'bottom'} block, row {r}, column {c}, x = {x:.4g} a, "
+                f"y = {y:.4g} a)")
         if f[L.L_BITS] & L.FLAG_NONFINITE:
-            return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) {where}; "
+            return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) at {node}; "
                     f"likely cause: a time step above the stability limit; try a smaller time.safety")
-        return (f"state grew without bound: at step {step} (t = {t:.4g} l/c_r from drive start) the node {where} "
+        return (f"state grew without bound: at step {step} (t = {t:.4g} l/c_r from drive start) the {node} "
                 f"moved {f[L.L_VALUE] / 1e6:.3g} a in one step (faster than any wave of the lattice); likely cause: "
                 f"a time step above the stability limit (try a smaller time.safety); output written so far is kept")

@@ -16,6 +16,7 @@ from ..model.physics import Material
 from ..model.stability import dt_max as _dt_max
 from ..model.stability import omega_max as _omega_max
 from ..parallel.layout import Reach, interface_reach, max_ranks
+from . import limits
 
 
 @dataclass
@@ -84,7 +85,8 @@ def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float,
 
 
 def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
-    """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt."""
+    """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt or a drive the
+    engine would take for a blow-up (``limits.check_setup``)."""
     mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
                               scene["material.bottom_kn"], scene["material.bottom_kt"])
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
@@ -112,8 +114,10 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     reach = scene["interface.slip_reach"]
     if reach == 0:
         reach = (v0 * scene["drive.duration"] * t_unit if scene["drive.mode"] != "none" else 0.0) + 2.0
-    return Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
-                 dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
-                 n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
-                 slip_reach=reach, reach=interface_reach(scene["interface.delta0"], scene["interface.delta_b"], reach),
-                 precision=scene["time.precision"])
+    st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
+               dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
+               n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
+               slip_reach=reach, reach=interface_reach(scene["interface.delta0"], scene["interface.delta_b"], reach),
+               precision=scene["time.precision"])
+    limits.check_setup(st)
+    return st

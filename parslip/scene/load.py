@@ -16,6 +16,7 @@ else:  # pragma: no cover
 
 from ..errors import ConfigError
 from ..model.physics import max_nu
+from . import limits
 from .schema import SCHEMA
 
 
@@ -110,3 +111,4 @@ def _cross_checks(s: dict[str, Any]) -> None:
             s["lattice.bottom_rows"] and (s["lattice.bottom_cols"] - s["lattice.top_cols"]) % 2):
         raise ConfigError(f"lattice.bottom_cols = {s['lattice.bottom_cols']!r}: the top block (top_cols = "
                           f"{s['lattice.top_cols']}) must centre on it; accepted: >= top_cols with the same parity")
+    limits.check_scene(s)

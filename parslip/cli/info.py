@@ -1,0 +1,133 @@
+"""`parslip info SCENE [--set KEY=VALUE ...] [--ranks N]`: what a scene is and what it will cost.
+
+Everything is derived before a run, without MPI: the lattice and its nodes,
+the materials and wave speeds, the time step and how it was found, the steps
+of each phase, the cost in node updates and wall time (``scene.budget``), the
+memory per rank from ``engine.memory.predict``, the output size, the usable
+rank counts, what the engine leaves out of this scene and what that saves,
+the warnings ``scene.advice`` raises, and the quick-look preset when the
+scene differs from it.  Each line starts with a 17-column label.
+"""
+from __future__ import annotations
+
+from ..errors import ConfigError
+from ..scene import advice, budget, presets
+from ..scene.limits import closing_load
+from ..scene.load import load_scene_file, parse_set, resolve
+
+LABEL = 17
+
+
+def _mib(b: float) -> str:
+    return f"{b / 2 ** 20:.1f} MiB"
+
+
+def _duration(s: float) -> str:
+    """Seconds as '42 s', '3.5 min' or '2.1 h'."""
+    if s < 120:
+        return f"{s:.3g} s"
+    if s < 7200:
+        return f"{s / 60:.3g} min"
+    return f"{s / 3600:.3g} h"
+
+
+def _line(label: str, text: str) -> str:
+    return f"{label:{LABEL}s}{text}"
+
+
+def _block(label: str, items: list[str]) -> list[str]:
+    """A label on the first line, the items one per line beneath it ('none' for no items)."""
+    items = items or ["none"]
+    return [_line(label if i == 0 else "", item) for i, item in enumerate(items)]
+
+
+def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[str]:
+    """The lines of `parslip info` for the derived scene ``st`` on ``ranks`` ranks."""
+    from ..engine.memory import BASE, predict
+    s, lat, mat = st.scene, st.lattice, st.material
+    top, bot = lat.top, lat.bottom
+    n = lat.n_nodes
+    fixed = n - budget.integrated_nodes(lat)
+    driven = {"push": top.rows, "pull": top.rows, "shear": top.cols}.get(s["drive.mode"], 0)
+    if lat.rigid:
+        sub = f"substrate rigid: one row of {bot.cols} fixed interface sites, no nodes"
+    elif lat.has_interface:
+        sub = f"substrate {bot.rows} x {bot.cols} (elastic; its row AB fixed)"
+    else:
+        sub = "no substrate (a free block)"
+    out = [_line("scene", scene_path),
+           _line("lattice", f"top block {top.rows} x {top.cols}, {sub}: {n} nodes ({n - fixed} integrated, "
+                            f"{fixed} fixed, {driven} driven), contact l = {st.l:g} a, "
+                            f"{lat.n_top_sites} interface sites"),
+           _line("top block", f"nu = {mat.nu} ({mat.model}): k_n = {mat.kn_top:.6g}, k_t = {mat.kt_top:.6g} "
+                              f"(m c^2/a^2)")]
+    if lat.has_interface:
+        from ..model.physics import born_wave_speeds
+        cl_b, cs_b = born_wave_speeds(mat.kn_bottom, mat.kt_bottom)
+        out.append(_line("substrate", f"k_n = {mat.kn_bottom:.6g}, k_t = {mat.kt_bottom:.6g}: c_l = {cl_b:.6g}, "
+                                      f"c_s = {cs_b:.6g}" + (" (rigid: only its interface sites, fixed)"
+                                                             if lat.rigid else "")))
+        out.append(_line("interface", f"k_x = {s['interface.kx']:g}, k_y = {s['interface.ky']:g}, delta0 = "
+                                      f"{s['interface.delta0']:g} a, delta_b = {s['interface.delta_b']:g} a; "
+                                      f"F_N = {s['load.FN']:g} (the gap closes at N k_y delta0 = "
+                                      f"{closing_load(s):.6g}): mean gap at rest "
+                                      f"{s['interface.delta0'] - s['load.FN'] / (top.cols * s['interface.ky']):.4g} a"))
+    out += [
+        _line("wave speeds", f"c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})"),
+        _line("Rayleigh speed", f"c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)"),
+        _line("surface wave", f"{mat.c_surface_born:.6g} = {mat.c_surface_born / mat.c_s:.5f} c_s "
+                              "(the Born lattice's own: k_t resists rotation)"),
+        _line("stability", f"omega_max = {st.omega_max:.6g} ({_how(st.omega_method)}): dt < 2/omega_max = "
+                           f"{st.dt_limit:.6g}  |  paper's dt < a/c_l = {st.dt_paper:.6g}"
+                           + (" (not enough here)" if st.dt_paper >= st.dt_limit else "")),
+        _line("time step", f"dt = {st.dt:.6g} a/c ({st.dt / st.dt_limit:.3f} of the limit"
+                           + (", time.dt" if s["time.dt"] > 0 else f", time.safety = {s['time.safety']:g}") + ")"),
+        _line("steps", f"ramp {st.n_ramp} + settle {st.n_settle} + drive {st.n_drive} = {st.n_steps}"
+                       f"  (l/c_r = {st.t_unit / st.dt:.1f} steps; ramp {s['load.ramp']:g}, settle "
+                       f"{s['load.settle']:g}, drive {s['drive.duration']:g} l/c_r)"),
+    ]
+    ups = budget.node_updates(st)
+    rate = budget.THROUGHPUT[st.precision]
+    out.append(_line("cost", f"{ups:.4g} node-updates ({n} nodes x {st.n_steps} steps): about "
+                             f"{_duration(budget.wall_seconds(st, ranks))} of time loop on {ranks} rank(s) at "
+                             f"{rate / 1e6:.0f} M node-updates/s per rank ({st.precision}, measured by parslip bench)"))
+    mem = predict(st, ranks)
+    big = max(range(ranks), key=lambda r: mem["per_rank"][r])
+    out.append(_line("memory", f"{_mib(mem['per_rank'][big])} on the largest rank (rank {big}), "
+                               f"{_mib(mem['total'])} in all on {ranks} rank(s): {mem['bytes_per_node']:.0f} B "
+                               f"per node beyond {_mib(BASE)} of process per rank"))
+    ob = budget.output_bytes(st)
+    out.append(_line("output", f"{st.n_frames} interface frames (every {st.frame_every} steps) {_mib(ob['interface'])}"
+                               f" + {st.n_snapshots} snapshots {_mib(ob['snapshots'])} = {_mib(ob['total'])} "
+                               f"of data"))
+    r = st.reach
+    out.append(_line("ranks", f"1 to {st.max_ranks()} (slabs of whole columns; interface halos of {r.top_site} and "
+                              f"{r.bottom_site} columns serve a slip reach of {st.slip_reach:.3g} a, across as "
+                              f"many slabs as needed)"))
+    out += _block("left out", [f"{item}: {text}" for item, text in budget.left_out(st, ranks)])
+    out += _block("warnings", advice.warnings(st))
+    diff = presets.differences(s, presets.QUICK_LOOK)
+    if diff:
+        extra = "".join(f" --set {x}" for x in list(sets) + diff)
+        out.append(_line("quick look", f"parslip run {scene_path}{extra}"))
+    return out
+
+
+def _how(method: str) -> str:
+    if method == "lanczos":
+        return "lanczos: largest eigenvalue of the assembled stiffness, interface springs included"
+    if method == "bound":
+        return "bound: infinite-lattice maximum + 2 max(k_x, k_y), a rigorous upper bound"
+    return method
+
+
+def cmd_info(args) -> int:
+    from ..scene.derive import derive
+    scene = resolve(load_scene_file(args.scene), [parse_set(x) for x in args.set])
+    st = derive(scene)
+    ranks = args.ranks
+    if not 1 <= ranks <= st.max_ranks():
+        raise ConfigError(f"--ranks {ranks}: accepted: 1 to {st.max_ranks()} (every rank owns a column of the "
+                          f"lattice)")
+    print("\n".join(report(st, args.scene, ranks, args.set)))
+    return 0
