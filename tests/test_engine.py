@@ -5,8 +5,7 @@ import pytest
 
 from helpers import SMALL, reference, require, run_cli, scene, simulation, small_toml, datasets
 from parslip.engine.kernels import interface as ik
-from parslip.engine.simulation import Simulation
-from parslip.model.lattice import BOTTOM, TOP
+from parslip.model.lattice import TOP
 from parslip.scene.derive import derive
 
 

@@ -357,7 +357,7 @@ def spacetime_png(iface: dict, png: str, title: str = "") -> bool:
     import struct
     import zlib
 
-    x, t, intact = iface["x"], iface["t"], iface["intact"]
+    x, intact = iface["x"], iface["intact"]
     if len(x) == 0:
         return False            # a free block has no interface to plot
     img = np.asarray(intact, np.uint8)

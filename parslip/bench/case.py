@@ -22,7 +22,6 @@ import os  # noqa: E402
 import resource  # noqa: E402
 import tempfile  # noqa: E402
 
-import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
 from ..engine import loop as L  # noqa: E402

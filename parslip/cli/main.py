@@ -16,9 +16,8 @@ import argparse
 import importlib
 import os
 import sys
-import time
 
-from ..errors import EXIT_BAD_INPUT, EXIT_RUN_FAILED, ConfigError
+from ..errors import EXIT_BAD_INPUT, ConfigError
 from ..parallel.launcher import start_or_refuse
 from ..scene.load import load_scene_file, parse_set, resolve
 from ..scene.schema import describe_keys

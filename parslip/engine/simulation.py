@@ -321,9 +321,14 @@ class Simulation:
         x, y = c + float(B.offset(r)), B.y0 + r * np.sqrt(3) / 2
         node = (f"node {gid} ({'top' if b == TOP else 'bottom'} block, row {r}, column {c}, x = {x:.4g} a, "
                 f"y = {y:.4g} a)")
+        from ..io.cache import cache_dir
+        from ..scene.derive import CACHE_HITS
+        cause = "a time step above the stability limit (try a smaller time.safety)"
+        if (st.omega_max, st.omega_method) in CACHE_HITS:
+            cause += f"; omega_max was read from the disk cache in {cache_dir()}: delete it if in doubt"
         if f[L.L_BITS] & L.FLAG_NONFINITE:
             return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) at {node}; "
-                    f"likely cause: a time step above the stability limit; try a smaller time.safety")
+                    f"likely cause: {cause}")
         return (f"state grew without bound: at step {step} (t = {t:.4g} l/c_r from drive start) the {node} "
                 f"moved {f[L.L_VALUE] / 1e6:.3g} a in one step (faster than any wave of the lattice); likely cause: "
-                f"a time step above the stability limit (try a smaller time.safety); output written so far is kept")
+                f"{cause}; output written so far is kept")

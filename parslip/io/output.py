@@ -11,9 +11,7 @@ the same layout.  Either way the file is identical for any rank count.
 """
 from __future__ import annotations
 
-import datetime as _dt
 import os
-import socket
 import subprocess
 
 import h5py

@@ -70,6 +70,10 @@ class Setup:
         return t_internal / self.t_unit
 
 
+# omega_max values this process read from the disk cache (a runaway's message then names the cache).
+CACHE_HITS: set = set()
+
+
 def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float, str]:
     """``model.stability.omega_max``, kept on disk between runs (``io.cache``)."""
     from ..io import cache
@@ -78,6 +82,7 @@ def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float,
                   kn=[float(v) for v in kn], kt=[float(v) for v in kt], kx=float(kx), ky=float(ky))
     hit = cache.lookup(k)
     if hit is not None:
+        CACHE_HITS.add(hit)
         return hit
     value = _omega_max(lat, kn, kt, kx, ky)
     cache.store(k, value)
