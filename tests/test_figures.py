@@ -191,3 +191,15 @@ def test_stress_map_times_on_one_snapshot_are_drawn_once_and_said(tmp_path, monk
         logger.setLevel(level)
     assert [os.path.basename(p) for p in out] == ["map_sxy_t0004.00.png"] and len(drawn) == 1
     assert any("too sparse" in n for n in notes)
+
+
+def test_push_against_pull_speeds_on_a_log_axis(small_run, tmp_path, monkeypatch):
+    """In c_r scale the speeds span slow pulses and their run-up to c_r: a log axis; v/v0 stays linear."""
+    run = parslip.open(small_run)
+    scales = []
+    real_save = figures.save
+    monkeypatch.setattr(figures, "save", lambda fig, d, name: scales.append(
+        [ax.get_yscale() for ax in fig.axes if ax.get_lines()]) or real_save(fig, d, name))
+    figures.compare_speeds([run, run], str(tmp_path), n=1, scale="c_r")
+    figures.compare_speeds([run, run], str(tmp_path), n=1, scale="v0")
+    assert scales == [["log"], ["linear"]]

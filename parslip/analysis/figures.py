@@ -417,7 +417,8 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
     scale ``v0``: v/v0 against x_tip/l (Fig. 2d, the v0 sweep, where v is proportional to v0);
     the y axis is clipped to the steady stretch (``_clip_to_steady``);
     ``c_r``: |v|/c_r against the distance from the nucleation site (appendix D, push against pull,
-    which run in opposite directions).  ``auto``: v0 when the runs' v0 differ.  Returns the paths
+    which run in opposite directions), on a log axis: on a linear one the steady stretch the appendix
+    compares lies flat under the final run-up to c_r.  ``auto``: v0 when the runs' v0 differ.  Returns the paths
     and rows of (run, mode, v0, front, mean speed in c_r, mean speed / v0).
     """
     plt = _plt()
@@ -444,6 +445,8 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
         ax = axes[0, i]
         if scale == "v0":
             _clip_to_steady(ax)
+        elif ax.get_lines():
+            ax.set_yscale("log")            # slow pulses (~0.01 c_r) and their run-up to c_r on one axis
         ax.set_title(f"front {i + 1}", fontsize=9)
         ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
         ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")
