@@ -165,3 +165,17 @@ def test_csv_round_trip_keeps_every_cell():
     assert back[0]["reference"] is True and back[0]["vs_limit"] is False and back[1]["vs_limit"] is True
     assert back[1]["speed"] == 0.125 and math.isnan(back[1]["interval"]) and back[0]["drive_cpu_s"] == 1.0
     assert accuracy.to_markdown(back) == accuracy.to_markdown(rows)
+
+
+def test_info_names_the_presets(capsys):
+    """The shipped push scene is the publication preset; the quick look is two --set items away."""
+    import os
+    scene = os.path.join(os.path.dirname(__file__), "..", "run", "push.toml")
+    assert main(["info", scene]) == 0
+    out = capsys.readouterr().out
+    assert "quick look       --set lattice.substrate=rigid --set time.precision=float32  (" in out
+    assert "publication      this scene is it" in out
+    from parslip.scene.load import load_scene_file, resolve
+    from parslip.scene.presets import QUICK_LOOK, differences
+    quick = resolve(load_scene_file(scene), [("lattice.substrate", "rigid"), ("time.precision", "float32")])
+    assert differences(quick, QUICK_LOOK) == []

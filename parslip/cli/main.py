@@ -145,6 +145,11 @@ def cmd_info(args) -> int:
     r = st.reach
     print(f"ranks            1 to {st.max_ranks()} (slabs of whole columns; interface halos of {r.top_site} and "
           f"{r.bottom_site} columns serve a slip reach of {st.slip_reach:.3g} a, across as many slabs as needed)")
+    from ..scene.presets import PUBLICATION, QUICK_LOOK, differences
+    for name, preset in (("quick look", QUICK_LOOK), ("publication", PUBLICATION)):
+        d = differences(scene, preset)
+        print(f"{name:<17}" + (" ".join(f"--set {x}" for x in d) if d else "this scene is it")
+              + "  (README: Recommended settings)")
     return 0
 
 

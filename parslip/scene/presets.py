@@ -27,7 +27,7 @@ its finest setting:
   it is a geometry, not a preset key.
 
 Each preset is a set of scene keys with the value to use; ``differences``
-turns a scene into ``--set`` items that apply one.
+turns a scene into ``--set`` items that apply one (`parslip info` prints them for both).
 """
 from __future__ import annotations
 
