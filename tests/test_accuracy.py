@@ -144,6 +144,10 @@ def test_study_shares_runs_and_measures_against_the_limit(tmp_path):
     rows = accuracy.study(str(sc), str(tmp_path / "acc"), ["substrate_model", "cadence"], duration=4.0)
     files = sorted(p.name for p in (tmp_path / "acc").glob("*.vtkhdf"))
     assert len(files) == 4 + 3, files
+    # The substrate runs record the interface at the cadence knob's finest setting, 0.25 a/c_r (to a whole
+    # number of steps), not the default 1 a/c_r: a quarter of l/c_r over the 24 sites.
+    step = float(np.median(np.diff(parslip.open(str(tmp_path / "acc" / "substrate_model_k_n_1e3.vtkhdf")).times)))
+    assert 0.5 * 0.25 / 24 < step < 1.5 * 0.25 / 24
     lim = [r for r in rows if r["against"] == "rigid"]
     assert [r["setting"] for r in lim] == ["k_n 100", "k_n 1e3", "k_n 1e4"]
     rigid = next(r for r in rows if r["setting"] == "rigid" and r["against"] == "k_n 100")
