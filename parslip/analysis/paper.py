@@ -311,6 +311,12 @@ VARIATIONS: list[Variation] = [
               lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
     Variation("fn_per_node", _T0_BREAK, "F_N = 1 on every node of SR (total 100) instead of 1 in all",
               ("shear",), ("load.FN=100.0",), lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
+    Variation("plane_stress", _T0_BREAK, "nu = 0.2 read as plane stress (c_l/c_s = sqrt(2/(1-nu))), not plane strain",
+              ("shear",), ('material.model="plane_stress"',), lambda r: first_break_time(r["shear"]), "l/c_r",
+              "65.37"),
+    Variation("reform_zero", _T0_BREAK, "a re-formed bond's rest offset 0 instead of its offset when it forms",
+              ("shear",), ('interface.reform_x0="zero"',), lambda r: first_break_time(r["shear"]), "l/c_r",
+              "65.37"),
     Variation("rigid", _T0_BREAK, "a rigid substrate (k_n -> infinity: 'comparatively rigid')",
               ("shear",), ('lattice.substrate="rigid"',), lambda r: first_break_time(r["shear"]), "l/c_r",
               "65.37"),
@@ -331,6 +337,10 @@ VARIATIONS: list[Variation] = [
               lambda r: far_edge_width(r["shear"]), "a", "100"),
     Variation("fn_per_node", _T0_KIND, "F_N = 1 per node (total 100)", ("shear",), ("load.FN=100.0",),
               lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("plane_stress", _T0_KIND, "nu = 0.2 read as plane stress", ("shear",),
+              ('material.model="plane_stress"',), lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("reform_zero", _T0_KIND, "a re-formed bond's rest offset 0", ("shear",),
+              ('interface.reform_x0="zero"',), lambda r: far_edge_width(r["shear"]), "a", "100"),
     Variation("mean_speed", _RATIO, "speed read as each pulse's mean over its whole run, not its steady stretch",
               ("push", "pull"), (), lambda r: speed_ratio(r["pull"], r["push"], how="mean"), "", "0.5",
               baseline=lambda r: speed_ratio(r["pull"], r["push"])),
@@ -342,6 +352,8 @@ VARIATIONS: list[Variation] = [
               ("push", "pull"), ("load.FN=100.0",), lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
     Variation("fn2", _RATIO, "F_N doubled (2 in all)", ("push", "pull"), ("load.FN=2.0",),
               lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("plane_stress", _RATIO, "nu = 0.2 read as plane stress", ("push", "pull"),
+              ('material.model="plane_stress"',), lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
     Variation("reform_zero", _RATIO, "a re-formed bond's rest offset 0 (pre-stressed) instead of its offset "
               "when it forms", ("push", "pull"), ('interface.reform_x0="zero"',),
               lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
@@ -360,6 +372,8 @@ VARIATIONS: list[Variation] = [
               ("push",), ('interface.reform_x0="zero"',), lambda r: steady_width(r["push"]), "a", "~1"),
     Variation("zeta0", _WIDTH, "no damping (zeta = 0)", ("push",), ("time.zeta=0.0",),
               lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("plane_stress", _WIDTH, "nu = 0.2 read as plane stress", ("push",),
+              ('material.model="plane_stress"',), lambda r: steady_width(r["push"]), "a", "~1"),
 ]
 
 
