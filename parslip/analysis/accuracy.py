@@ -5,14 +5,17 @@ run: first-break time and site, nucleation interval, mean speed of the first
 three fronts, slip per front, and the fraction of the space-time map of
 intact bonds that disagrees on a common grid; (2) KNOBS, the data-driven list
 of fidelity knobs, each a reference (its finest setting) and variants, every
-setting a set of scene overrides computed from the base scene; (3) ``study``,
+setting a set of scene overrides computed from the base scene, and optionally
+a limit the variants converge to (the rigid substrate); (3) ``study``,
 which runs every needed setting through ``parslip run`` subprocesses, times
-each one's wall clock, and reports a knob whose key the scene refuses
+each one (the subprocess's wall clock; its time loop and drive phase, wall
+and CPU, from its log), and reports a knob whose key the scene refuses
 ("unknown key", exit 2) as unavailable instead of failing; (4) the CSV and
-Markdown tables and the Pareto plot of error against run time.
+Markdown tables (and reading the CSV back) and the Pareto plot of error
+against the drive phase's CPU time.
 
 Units: times in l/c_r, sites in l, speeds in c_r, slip in l; relative
-errors are |test - ref| / |ref|; wall time in seconds.
+errors are |test - ref| / |ref|; run times in seconds.
 """
 from __future__ import annotations
 
@@ -144,6 +147,7 @@ def _preset(name: str) -> dict:
     """A preset of ``parslip.scene.presets`` as scene overrides, its interface cadence left to the study."""
     from ..scene import presets
     return {k: v for k, v in getattr(presets, name).items() if k != "output.interface_dt"}
+
 
 # Drive long enough for the first three nucleations and the fronts' first stretch (l/c_r), by drive mode.
 DURATION = {"push": 32.0, "pull": 32.0, "shear": 76.0}
