@@ -114,3 +114,72 @@ def test_unknown_knob_is_one_line(tmp_path, capsys):
     assert main(["accuracy", str(sc), "-o", str(tmp_path), "--knob", "nope"]) == 2
     err = capsys.readouterr().err.strip()
     assert "--knob 'nope': unknown knob; accepted: time_step" in err and "\n" not in err
+
+
+def test_log_times_read_the_loop_and_the_drive_phase():
+    text = ("12:00:00 parslip 0/1 INFO: done in 3.0 s: 52,047 steps/s\n"
+            "12:00:00 parslip 0/1 INFO: drive phase 2.512 s (2.250 s CPU): 149136 steps, 59,369 steps/s\n")
+    assert accuracy.log_times(text) == (3.0, 2.512, 2.25)
+    solver, drive, cpu = accuracy.log_times("done in 1.5 s")
+    assert solver == 1.5 and math.isnan(drive) and math.isnan(cpu)
+
+
+def test_a_run_logs_its_drive_phase(tmp_path):
+    """The drive phase is timed from the drive's first step: never longer than the whole time loop
+    (rounded to 0.1 s in its line), and its CPU time is no more than its wall time plus a clock tick."""
+    sc = tmp_path / "s.toml"
+    sc.write_text(small_toml(**{"drive.duration": 4.0, "output.snapshots": 0}))
+    r = accuracy.run_setting(str(sc), str(tmp_path / "a.vtkhdf"), {})
+    assert r.code == 0
+    assert 0 < r.drive <= r.solver + 0.05
+    assert 0 < r.drive_cpu <= r.drive + 0.02
+
+
+def test_study_shares_runs_and_measures_against_the_limit(tmp_path):
+    """Settings that spell the same scene share one run (k_n 100 is also the cadence knob's reference:
+    one file for both), and the substrate knob's settings are also measured against the rigid limit,
+    which is the rigid row's error against k_n 100 read the other way round for k_n 100 itself."""
+    sc = tmp_path / "tiny.toml"
+    sc.write_text(small_toml())
+    rows = accuracy.study(str(sc), str(tmp_path / "acc"), ["substrate_model", "cadence"], duration=4.0)
+    files = sorted(p.name for p in (tmp_path / "acc").glob("*.vtkhdf"))
+    assert len(files) == 4 + 3, files
+    # The substrate runs record the interface at the cadence knob's finest setting, 0.25 a/c_r (to a whole
+    # number of steps), not the default 1 a/c_r: a quarter of l/c_r over the 24 sites.
+    step = float(np.median(np.diff(parslip.open(str(tmp_path / "acc" / "substrate_model_k_n_1e3.vtkhdf")).times)))
+    assert 0.5 * 0.25 / 24 < step < 1.5 * 0.25 / 24
+    lim = [r for r in rows if r["against"] == "rigid"]
+    assert [r["setting"] for r in lim] == ["k_n 100", "k_n 1e3", "k_n 1e4"]
+    rigid = next(r for r in rows if r["setting"] == "rigid" and r["against"] == "k_n 100")
+    assert lim[0]["first_break_t"] == pytest.approx(rigid["first_break_t"])
+    assert lim[0]["spacetime"] == pytest.approx(rigid["spacetime"], abs=0.02)   # same cells, other grid
+    assert all(math.isfinite(r["drive_cpu_s"]) for r in rows if r["status"] == "ok")
+    md = accuracy.to_markdown(rows)
+    assert md.count("\n") == len(rows) + 2 and "| rigid |" in md
+
+
+def test_csv_round_trip_keeps_every_cell():
+    rows = [{"knob": "substrate_model", "setting": "k_n 100", "against": "k_n 100", "reference": True,
+             "status": "ok", "wall_s": 2.5, "solver_s": 1.5, "drive_s": 1.25, "drive_cpu_s": 1.0,
+             **{m: 0.0 for m in accuracy.METRICS}},
+            {"knob": "substrate_model", "setting": "k_n 100", "against": "rigid", "reference": False,
+             "status": "ok", "wall_s": 2.5, "solver_s": 1.5, "drive_s": 1.25, "drive_cpu_s": 1.0,
+             **{m: 0.125 for m in accuracy.METRICS}, "interval": math.nan, "vs_limit": True}]
+    back = accuracy.from_csv(accuracy.to_csv(rows))
+    assert back[0]["reference"] is True and back[0]["vs_limit"] is False and back[1]["vs_limit"] is True
+    assert back[1]["speed"] == 0.125 and math.isnan(back[1]["interval"]) and back[0]["drive_cpu_s"] == 1.0
+    assert accuracy.to_markdown(back) == accuracy.to_markdown(rows)
+
+
+def test_info_names_the_presets(capsys):
+    """The shipped push scene is the publication preset; the quick look is two --set items away."""
+    import os
+    scene = os.path.join(os.path.dirname(__file__), "..", "run", "push.toml")
+    assert main(["info", scene]) == 0
+    out = capsys.readouterr().out
+    assert "quick look       --set lattice.substrate=rigid --set time.precision=float32  (" in out
+    assert "publication      this scene is it" in out
+    from parslip.scene.load import load_scene_file, resolve
+    from parslip.scene.presets import QUICK_LOOK, differences
+    quick = resolve(load_scene_file(scene), [("lattice.substrate", "rigid"), ("time.precision", "float32")])
+    assert differences(quick, QUICK_LOOK) == []

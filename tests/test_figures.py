@@ -139,3 +139,67 @@ def test_a_run_without_fronts_still_gets_its_figures(tmp_path):
     paths = figures.write_all(run, str(tmp_path))
     assert sum(p.endswith(".png") for p in paths) == 8          # all but the stress maps (no snapshots)
     assert (tmp_path / "mode2_fit.csv").read_text().count("\n") == 1
+
+
+def _run(k0s, nf, crack=False, fps=1):
+    from helpers import blank, draw
+    from parslip.analysis.results import Run
+    iface = blank(nf)
+    for k0 in k0s:
+        draw(iface, k0, 0, +1, fps, 2, 0.01, crack=crack)
+    iface["sxy"] = iface["syy"] = np.zeros_like(iface["ux"])
+    return Run.from_arrays(iface, {"drive.mode": "shear", "drive.v0": 1e-4})
+
+
+def test_a_lone_fast_front_gets_a_zoomed_space_time_panel(tmp_path):
+    """A crack crossing the 60 sites in 60 of 2000 frames (3 % of the record) is framed from 0.5 l/c_r
+    before it to 2 l/c_r after its last site; a train of pulses filling the record is not zoomed."""
+    from helpers import DT, NS
+    lone = _run([1500], 2000, crack=True)
+    t0, t1 = figures.zoom_window(lone)
+    assert t0 == pytest.approx(1500 * DT - 0.5) and t1 == pytest.approx((1500 + NS - 1) * DT + 2.0)
+    assert figures.zoom_window(_run([10, 300, 600], 1000, fps=4)) is None
+    png, _ = figures.fig_spacetime(lone, str(tmp_path))
+    from PIL import Image
+    w, h = Image.open(png).size
+    assert w > h                                                # two panels side by side
+
+
+def test_stress_map_times_on_one_snapshot_are_drawn_once_and_said(tmp_path, monkeypatch):
+    """Three map times 0.3 l/c_r apart with snapshots 4 l/c_r apart fall on one snapshot: one file, and
+    a logged note that the snapshots are too sparse."""
+    import logging
+
+    from parslip.analysis import render
+    drawn, notes = [], []
+    monkeypatch.setattr(render, "render_frame", lambda run, field, t, png: drawn.append((field, t, png)))
+
+    class Snaps:
+        snapshot_times = np.array([0.0, 4.0, 8.0])
+
+    class Keep(logging.Handler):        # the parslip logger may not propagate (the command line set it up)
+        def emit(self, record):
+            notes.append(record.getMessage())
+    logger, handler = logging.getLogger("parslip"), Keep()
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        out = figures.fig_stress_maps(Snaps(), str(tmp_path), fields=("sxy",), times=[4.1, 4.4, 4.7])
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+    assert [os.path.basename(p) for p in out] == ["map_sxy_t0004.00.png"] and len(drawn) == 1
+    assert any("too sparse" in n for n in notes)
+
+
+def test_push_against_pull_speeds_on_a_log_axis(small_run, tmp_path, monkeypatch):
+    """In c_r scale the speeds span slow pulses and their run-up to c_r: a log axis; v/v0 stays linear."""
+    run = parslip.open(small_run)
+    scales = []
+    real_save = figures.save
+    monkeypatch.setattr(figures, "save", lambda fig, d, name: scales.append(
+        [ax.get_yscale() for ax in fig.axes if ax.get_lines()]) or real_save(fig, d, name))
+    figures.compare_speeds([run, run], str(tmp_path), n=1, scale="c_r")
+    figures.compare_speeds([run, run], str(tmp_path), n=1, scale="v0")
+    assert scales == [["log"], ["linear"]]

@@ -87,19 +87,39 @@ def draw_spacetime(ax, iface: dict) -> None:
     ax.set_ylabel("t c_r / l")
 
 
+def zoom_window(run, share: float = 0.1, pad: float = 0.5, after: float = 2.0):
+    """(t0, t1) in l/c_r framing every front when they all fit in less than ``share`` of the record (a
+    lone fast rupture, Fig. 6b, is a hairline on the whole record's time axis): from ``pad`` before the
+    first nucleation to ``after`` past the last tip, where re-bonding shows.  None otherwise."""
+    fr = run.fronts()
+    if not fr or len(run.times) < 2:
+        return None
+    t0 = min(f.nucleation_time for f in fr)
+    t1 = max(float(f.tip["t"][-1]) for f in fr)
+    if t1 - t0 >= share * (run.times[-1] - run.times[0]):
+        return None
+    return max(float(run.times[0]), t0 - pad), min(float(run.times[-1]), t1 + after)
+
+
 def fig_spacetime(run, out_dir: str) -> list[str]:
-    """Space-time diagram with each detected front's tip drawn over it and a red arrow for its direction."""
+    """Space-time diagram with each detected front's tip drawn over it and a red arrow for its direction;
+    beside it the same zoomed in time on the fronts when they fill little of the record (``zoom_window``)."""
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(5, 6))
-    draw_spacetime(ax, run.interface)
-    for i, f in enumerate(run.fronts()):
-        ax.plot(f.tip["x"], f.tip["t"], color=colour(i), lw=1.2)
-        if f.direction:
-            j = len(f.tip["x"]) // 2
-            j1 = min(j + max(2, len(f.tip["x"]) // 8), len(f.tip["x"]) - 1)
-            ax.annotate("", xy=(f.tip["x"][j1], f.tip["t"][j1]), xytext=(f.tip["x"][j], f.tip["t"][j]),
-                        arrowprops=dict(arrowstyle="->", color="red", lw=1.5))
-    ax.set_title(_title(run) + "\nintact yellow, broken white; detected tips", fontsize=8)
+    window = zoom_window(run)
+    fig, axes = plt.subplots(1, 2 if window else 1, figsize=(9 if window else 5, 6), squeeze=False)
+    for ax, lim in zip(axes[0], (None, window)):
+        draw_spacetime(ax, run.interface)
+        for i, f in enumerate(run.fronts()):
+            ax.plot(f.tip["x"], f.tip["t"], color=colour(i), lw=1.2)
+            if f.direction:
+                j = len(f.tip["x"]) // 2
+                j1 = min(j + max(2, len(f.tip["x"]) // 8), len(f.tip["x"]) - 1)
+                ax.annotate("", xy=(f.tip["x"][j1], f.tip["t"][j1]), xytext=(f.tip["x"][j], f.tip["t"][j]),
+                            arrowprops=dict(arrowstyle="->", color="red", lw=1.5))
+        if lim:
+            ax.set_ylim(*lim)
+            ax.set_title(f"zoom: t c_r/l = {lim[0]:.1f} to {lim[1]:.1f}", fontsize=8)
+    axes[0, 0].set_title(_title(run) + "\nintact yellow, broken white; detected tips", fontsize=8)
     return save(fig, out_dir, "spacetime")
 
 
@@ -345,12 +365,18 @@ def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> lis
         log.info("stress maps skipped: the run holds no snapshots (output.snapshots = 0)")
         return []
     out = []
+    times = map_times(run) if times is None else times
+    drawn = sorted({float(run.snapshot_times[np.argmin(np.abs(run.snapshot_times - t))]) for t in times})
+    if len(drawn) < len(set(times)):
+        log.info(f"stress maps: the times {', '.join(f'{t:.2f}' for t in times)} l/c_r fall on the snapshots "
+                 f"{', '.join(f'{t:.2f}' for t in drawn)}: the run's snapshots are too sparse to tell them apart")
     for field in fields:
-        for t in (map_times(run) if times is None else times):
+        for t in times:
             t_snap = float(run.snapshot_times[np.argmin(np.abs(run.snapshot_times - t))])   # what gets drawn
             png = os.path.join(out_dir, f"map_{field}_t{t_snap:07.2f}.png")
-            render.render_frame(run, field, t, png)
-            out.append(png)
+            if png not in out:
+                render.render_frame(run, field, t, png)
+                out.append(png)
     return out
 
 
@@ -391,7 +417,8 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
     scale ``v0``: v/v0 against x_tip/l (Fig. 2d, the v0 sweep, where v is proportional to v0);
     the y axis is clipped to the steady stretch (``_clip_to_steady``);
     ``c_r``: |v|/c_r against the distance from the nucleation site (appendix D, push against pull,
-    which run in opposite directions).  ``auto``: v0 when the runs' v0 differ.  Returns the paths
+    which run in opposite directions), on a log axis: on a linear one the steady stretch the appendix
+    compares lies flat under the final run-up to c_r.  ``auto``: v0 when the runs' v0 differ.  Returns the paths
     and rows of (run, mode, v0, front, mean speed in c_r, mean speed / v0).
     """
     plt = _plt()
@@ -418,6 +445,8 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
         ax = axes[0, i]
         if scale == "v0":
             _clip_to_steady(ax)
+        elif ax.get_lines():
+            ax.set_yscale("log")            # slow pulses (~0.01 c_r) and their run-up to c_r on one axis
         ax.set_title(f"front {i + 1}", fontsize=9)
         ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
         ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")

@@ -38,6 +38,17 @@ def edge_fronts(run) -> list:
     return [f for f in run.fronts() if abs(f.nucleation_x - edge) < EDGE]
 
 
+def edge_nucleations(run, min_sites: int = 5, max_gap: float = 3.0) -> list:
+    """Every front nucleated at the driven edge (``edge_fronts``), counting one cut short by the end of
+    the record: a front with fewer than ``min_sites`` sites counts when its tip was still advancing
+    within ``max_gap`` l/c_r of the last frame (it is young, not small), e.g. the tenth pulse of the
+    push scene, born at 96.4 l/c_r with three sites broken by 100."""
+    edge = 1.0 if run.mode == "pull" else 0.0
+    t_end = float(run.times[-1]) if len(run.times) else 0.0
+    return [f for f in run.fronts(min_sites=1) if abs(f.nucleation_x - edge) < EDGE
+            and (len(f.tip["x"]) >= min_sites or t_end - float(f.tip["t"][-1]) <= max_gap)]
+
+
 def nucleation_times(run, n: int = 4) -> list[float]:
     return [f.nucleation_time for f in edge_fronts(run)[:n]]
 
@@ -93,6 +104,37 @@ def steady_width(run, n: int = 4) -> float:
     return float(np.median(w)) if w else math.nan
 
 
+def section_width(run, t: float) -> float:
+    """Median length, in lattice spacings a, of the runs of broken bonds in the frame nearest ``t`` (l/c_r).
+
+    The paper's reading of a pulse width (Sec. 3.1.1, appendix A): a constant-time
+    section of the space-time map, where each pulse is one white run.  Runs
+    that touch either edge of the contact are left out (a pulse being born or
+    leaving).  One site is one a.  NaN when the frame has no interior run.
+    """
+    broken = run.interface["intact"][run.frame_at(t)] == 0
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], broken.astype(np.int8), [0]))))
+    starts, ends = edges[::2], edges[1::2]                  # run i covers sites starts[i] .. ends[i] - 1
+    keep = (starts > 0) & (ends < len(broken))
+    return float(np.median(ends[keep] - starts[keep])) if keep.any() else math.nan
+
+
+def far_edge_width(run) -> float:
+    """Broken sites behind the first front's tip when it reaches its last site, a: the whole contact
+    (l / a sites) for a crack, less for a pulse, whose bonds re-attach behind it while it runs."""
+    fr = run.fronts()
+    return float(fr[0].tip["w"][-1]) if fr else math.nan
+
+
+def speed_ratio(pull, push, n: int = 2, how: str = "steady") -> float:
+    """T+ / T- speed of the first ``n`` edge fronts: ``steady`` (``steady_speed``, the claims' reading)
+    or ``mean`` (each front's mean speed over its whole run, acceleration included), both in c_r."""
+    def v(run):
+        fr = edge_fronts(run)[:n]
+        return float(np.mean([steady_speed(f) if how == "steady" else abs(f.mean_speed) for f in fr]))
+    return v(pull) / v(push)
+
+
 def _fmt(v) -> str:
     if isinstance(v, str):
         return v
@@ -142,7 +184,7 @@ CLAIMS: list[Claim] = [
     Claim("T- pulse interval", "10.0 (from the Fig. 3 times); nearly constant", "Fig. 3 caption; Sec. 3.1.1",
           ("push",), lambda r: interval(r["push"]), "l/c_r"),
     Claim("T- pulses in 100 l/c_r", "10", "Sec. 3.1.1 (\"ten such pulses\")",
-          ("push",), lambda r: len(edge_fronts(r["push"]))),
+          ("push",), lambda r: len(edge_nucleations(r["push"]))),
     Claim("T- steady pulse speed", "<< 1 (Fig. 2c inset)", "Sec. 3.1.1-3.1.2",
           ("push",), lambda r: mean_steady_speed(r["push"]), "c_r"),
     Claim("T- leading pulse starts to accelerate at", "x/l ~ 0.7-0.8", "Sec. 3.1.1 (0.7), Sec. 3.1.2 (~0.8 l)",
@@ -204,12 +246,200 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(out) + "\n"
 
 
+# --- tests of the disagreements ------------------------------------------------------
+
+def _unit_factor(unit: str) -> float:
+    """c_ref / c_r for a reading of the paper's velocity unit: the classical Rayleigh speed (1), the
+    Born lattice's own surface wave, or the shear speed; plane strain, nu = 0.2 as in every scene."""
+    from ..model import physics
+    r = physics.cl_over_cs(0.2, "plane_strain")
+    c_r = physics.rayleigh_ratio(r)
+    if unit == "born":
+        kn, kt = physics.born_stiffness(r, 1.0)
+        return physics.born_surface_ratio(kn, kt) / c_r
+    return {"c_r": 1.0, "c_s": 1.0 / c_r}[unit]
+
+
+@dataclass(frozen=True)
+class Variation:
+    """A run that tests one likely reason for one disagreement with the paper.
+
+    ``sets`` (``--set`` items) change every run in ``roles`` (or, when empty,
+    nothing: an analysis variation reads the baseline runs); ``measure`` reads
+    the quantity from a dict of runs by role, the same way for the baseline and
+    the variation; ``baseline`` (default ``measure``) reads the baseline.
+    """
+    name: str                       # slug, in the run files' names
+    disagreement: str
+    reason: str
+    roles: tuple[str, ...]
+    sets: tuple[str, ...]
+    measure: Callable[[dict], object]
+    units: str = ""
+    paper: str = ""
+    baseline: Callable[[dict], object] | None = None
+
+
+def _scaled_first_break(unit: str):
+    """The T0 first break read in l/c_ref, for a run driven at 1e-4 c_ref (c_ref from ``_unit_factor``)."""
+    return lambda r: first_break_time(r["shear"]) * _unit_factor(unit)
+
+
+def _v0_in(unit: str) -> str:
+    return f"drive.v0={float(1e-4 * _unit_factor(unit))!r}"
+
+
+_T0_BREAK = "T0 first break 70.0 vs the paper's 65.37 l/c_r"
+_T0_KIND = "T0 front: a wide pulse, not a crack"
+_RATIO = "T+ / T- pulse speed 0.89 vs the paper's 0.5"
+_WIDTH = "T- pulse width ~4 a vs the paper's ~1 a"
+
+VARIATIONS: list[Variation] = [
+    Variation("bottom200", _T0_BREAK, "substrate 200 columns (the methods text) instead of 300 (the captions)",
+              ("shear",), ("lattice.bottom_cols=200",), lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
+    Variation("units_born", _T0_BREAK, "velocity unit = the Born lattice's own surface wave (0.9475 c_s): "
+              "v0 = 1e-4 of it, times read in l over it", ("shear",), (_v0_in("born"),),
+              _scaled_first_break("born"), "l/c_ref", "65.37", baseline=lambda r: first_break_time(r["shear"])),
+    Variation("units_cs", _T0_BREAK, "velocity unit = c_s: v0 = 1e-4 c_s, times read in l/c_s",
+              ("shear",), (_v0_in("c_s"),), _scaled_first_break("c_s"), "l/c_ref", "65.37",
+              baseline=lambda r: first_break_time(r["shear"])),
+    Variation("zeta0", _T0_BREAK, "no damping (zeta = 0)", ("shear",), ("time.zeta=0.0",),
+              lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
+    Variation("zeta0.05", _T0_BREAK, "damping zeta halved (0.05)", ("shear",), ("time.zeta=0.05",),
+              lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
+    Variation("zeta0.2", _T0_BREAK, "damping zeta doubled (0.2)", ("shear",), ("time.zeta=0.2",),
+              lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
+    Variation("fn_per_node", _T0_BREAK, "F_N = 1 on every node of SR (total 100) instead of 1 in all",
+              ("shear",), ("load.FN=100.0",), lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
+    Variation("plane_stress", _T0_BREAK, "nu = 0.2 read as plane stress (c_l/c_s = sqrt(2/(1-nu))), not plane strain",
+              ("shear",), ('material.model="plane_stress"',), lambda r: first_break_time(r["shear"]), "l/c_r",
+              "65.37"),
+    Variation("reform_zero", _T0_BREAK, "a re-formed bond's rest offset 0 instead of its offset when it forms",
+              ("shear",), ('interface.reform_x0="zero"',), lambda r: first_break_time(r["shear"]), "l/c_r",
+              "65.37"),
+    Variation("rigid", _T0_BREAK, "a rigid substrate (k_n -> infinity: 'comparatively rigid')",
+              ("shear",), ('lattice.substrate="rigid"',), lambda r: first_break_time(r["shear"]), "l/c_r",
+              "65.37"),
+    Variation("fine_cadence", _T0_KIND, "interface cadence 0.25 a/c_r instead of 1 a/c_r",
+              ("shear",), ("output.interface_dt=0.0025",), lambda r: far_edge_width(r["shear"]), "a",
+              "100 (crack: all bonds broken when it reaches x/l = 1)"),
+    Variation("zeta0", _T0_KIND, "no damping (zeta = 0)", ("shear",), ("time.zeta=0.0",),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("zeta0.01", _T0_KIND, "damping zeta / 10 (0.01)", ("shear",), ("time.zeta=0.01",),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("zeta0.05", _T0_KIND, "damping zeta halved (0.05)", ("shear",), ("time.zeta=0.05",),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("zeta0.2", _T0_KIND, "damping zeta doubled (0.2)", ("shear",), ("time.zeta=0.2",),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("bottom200", _T0_KIND, "substrate 200 columns", ("shear",), ("lattice.bottom_cols=200",),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("rigid", _T0_KIND, "a rigid substrate", ("shear",), ('lattice.substrate="rigid"',),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("fn_per_node", _T0_KIND, "F_N = 1 per node (total 100)", ("shear",), ("load.FN=100.0",),
+              lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("plane_stress", _T0_KIND, "nu = 0.2 read as plane stress", ("shear",),
+              ('material.model="plane_stress"',), lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("reform_zero", _T0_KIND, "a re-formed bond's rest offset 0", ("shear",),
+              ('interface.reform_x0="zero"',), lambda r: far_edge_width(r["shear"]), "a", "100"),
+    Variation("mean_speed", _RATIO, "speed read as each pulse's mean over its whole run, not its steady stretch",
+              ("push", "pull"), (), lambda r: speed_ratio(r["pull"], r["push"], how="mean"), "", "0.5",
+              baseline=lambda r: speed_ratio(r["pull"], r["push"])),
+    Variation("bottom200", _RATIO, "substrate 200 columns", ("push", "pull"), ("lattice.bottom_cols=200",),
+              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("zeta0.2", _RATIO, "damping zeta doubled (0.2)", ("push", "pull"), ("time.zeta=0.2",),
+              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("fn_per_node", _RATIO, "F_N = 1 per node (total 100): more compression at the nucleation site",
+              ("push", "pull"), ("load.FN=100.0",), lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("fn2", _RATIO, "F_N doubled (2 in all)", ("push", "pull"), ("load.FN=2.0",),
+              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("plane_stress", _RATIO, "nu = 0.2 read as plane stress", ("push", "pull"),
+              ('material.model="plane_stress"',), lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("reform_zero", _RATIO, "a re-formed bond's rest offset 0 (pre-stressed) instead of its offset "
+              "when it forms", ("push", "pull"), ('interface.reform_x0="zero"',),
+              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
+    Variation("section_t30", _WIDTH, "width read as the paper does: white runs in the section t c_r/l = 30",
+              ("push",), (), lambda r: section_width(r["push"], 30.0), "a", "~1",
+              baseline=lambda r: steady_width(r["push"])),
+    Variation("fine_cadence", _WIDTH, "interface cadence 0.25 a/c_r instead of 1 a/c_r", ("push",),
+              ("output.interface_dt=0.0025",), lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("zeta0.2", _WIDTH, "damping zeta doubled (0.2)", ("push",), ("time.zeta=0.2",),
+              lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("fn_per_node", _WIDTH, "F_N = 1 per node (total 100)", ("push",), ("load.FN=100.0",),
+              lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("bottom200", _WIDTH, "substrate 200 columns", ("push",), ("lattice.bottom_cols=200",),
+              lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("reform_zero", _WIDTH, "a re-formed bond's rest offset 0 instead of its offset when it forms",
+              ("push",), ('interface.reform_x0="zero"',), lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("zeta0", _WIDTH, "no damping (zeta = 0)", ("push",), ("time.zeta=0.0",),
+              lambda r: steady_width(r["push"]), "a", "~1"),
+    Variation("plane_stress", _WIDTH, "nu = 0.2 read as plane stress", ("push",),
+              ('material.model="plane_stress"',), lambda r: steady_width(r["push"]), "a", "~1"),
+]
+
+
+def _measure(fn, runs: dict) -> str:
+    try:
+        return _fmt(fn(runs))
+    except (IndexError, ValueError, ZeroDivisionError, KeyError) as e:      # too few fronts, a failed run
+        return f"n/a ({type(e).__name__})"
+
+
+def variation_path(run_dir: str, v: Variation, role: str) -> str:
+    return os.path.join(run_dir, "variations", f"{role}__{v.name}.vtkhdf")
+
+
+def run_variations(runs: dict, run_dir: str, scene_dir: str = "run", run_missing: bool = False,
+                    ranks: int = 1, variations=None) -> list[dict]:
+    """Each variation's quantity for the baseline runs and for the varied ones (made with ``run_missing``
+    as ``run_dir/variations/<role>__<name>.vtkhdf``; a run made once serves every variation that shares
+    its name and role).  Rows: disagreement, reason, change, units, paper, baseline, varied."""
+    from .results import open as open_run
+    rows = []
+    for v in variations or VARIATIONS:
+        if any(role not in runs for role in v.roles):
+            continue
+        varied, failed = dict(runs), ""
+        for role in (v.roles if v.sets else ()):
+            path = variation_path(run_dir, v, role)
+            if not os.path.exists(path) and run_missing:
+                os.makedirs(os.path.dirname(path), exist_ok=True)
+                log.info(f"variation {v.name}: {role} with {' '.join(v.sets)}")
+                code = run_scene(os.path.join(scene_dir, SCENES[role]), path, ranks, v.sets)
+                if code != 0:
+                    failed = f"run failed (exit {code})"
+            if os.path.exists(path) and not failed:
+                varied[role] = open_run(path)
+            else:
+                failed = failed or "not run"
+        rows.append({"disagreement": v.disagreement, "reason": v.reason,
+                     "change": " ".join(v.sets) or "(analysis only)", "units": v.units, "paper": v.paper,
+                     "baseline": _measure(v.baseline or v.measure, runs),
+                     "varied": failed or _measure(v.measure, varied)})
+    return rows
+
+
+def variations_markdown(rows: list[dict]) -> str:
+    """The variations as a Markdown table."""
+    keys = ("disagreement", "reason", "change", "units", "paper", "baseline", "varied")
+    out = ["| disagreement | reason tested | change | units | paper | parslip | with the change |",
+           "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        out.append("| " + " | ".join(str(r[k]).replace("|", "\\|") for k in keys) + " |")
+    return "\n".join(out) + "\n"
+
+
 # --- the runs -----------------------------------------------------------------------
 
 SCENES = {                  # role -> scene file under run/
     "push": "push.toml", "pull": "pull.toml", "shear": "shear.toml",
     "push_v0_1e-2": "push_v0_1e-2.toml", "push_v0_1e-4": "push_v0_1e-4.toml",
+    "shear_maps": "shear.toml",
 }
+# Roles that are a scene with overrides.  shear_maps: the T0 rupture crosses the contact in about
+# 1.5 l/c_r, and the shear scene's snapshots are 4 l/c_r apart; this run stops at 72 l/c_r with a
+# snapshot every 0.5 l/c_r (about 200 MB), for the stress maps of Fig. 7a.
+ROLE_SETS = {"shear_maps": ("drive.duration=72.0", "output.snapshots=144")}
+MAPS_ONLY = {"shear_maps": "shear"}     # role -> the role whose stress maps it draws (no figure set of its own)
 
 
 def run_scene(scene: str, out: str, ranks: int = 1, sets=()) -> int:
@@ -223,10 +453,11 @@ def run_scene(scene: str, out: str, ranks: int = 1, sets=()) -> int:
 
 
 def reproduce(run_dir: str, out_dir: str, scene_dir: str = "run", run_missing: bool = False,
-              ranks: int = 1, roles=None) -> dict:
+              ranks: int = 1, roles=None, variations: bool = False) -> dict:
     """Find (or, with ``run_missing``, make) each role's run as ``run_dir/<role>.vtkhdf``, then write each
     run's figure set under ``out_dir/<role>/``, the v0-sweep and push/pull comparisons and
-    ``out_dir/comparison.md``.  Returns the runs found."""
+    ``out_dir/comparison.md``; with ``variations``, also the runs that test each disagreement's likely
+    reason (``VARIATIONS``) and ``out_dir/variations.md``.  Returns the runs found."""
     from . import figures
     from .results import open as open_run
 
@@ -236,7 +467,7 @@ def reproduce(run_dir: str, out_dir: str, scene_dir: str = "run", run_missing: b
         path = os.path.join(run_dir, f"{role}.vtkhdf")
         if not os.path.exists(path) and run_missing:
             log.info(f"running {role}: {SCENES[role]} -> {path}")
-            if run_scene(os.path.join(scene_dir, SCENES[role]), path, ranks) != 0:
+            if run_scene(os.path.join(scene_dir, SCENES[role]), path, ranks, ROLE_SETS.get(role, ())) != 0:
                 log.warning(f"{role}: the run failed; left out")
                 continue
         if os.path.exists(path):
@@ -244,7 +475,11 @@ def reproduce(run_dir: str, out_dir: str, scene_dir: str = "run", run_missing: b
         else:
             log.info(f"{role}: no {path}; left out (pass --run to make it)")
     for role, run in runs.items():
-        figures.write_all(run, os.path.join(out_dir, role))
+        if role not in MAPS_ONLY:
+            figures.write_all(run, os.path.join(out_dir, role))
+    for role, of in MAPS_ONLY.items():       # denser snapshots of the same scene, at the times its run asks for
+        if role in runs and of in runs:
+            figures.fig_stress_maps(runs[role], os.path.join(out_dir, of), times=figures.map_times(runs[of]))
     sweep = [runs[k] for k in ("push_v0_1e-2", "push", "push_v0_1e-4") if k in runs]
     if len(sweep) > 1:
         figures.compare_speeds(sweep, out_dir, scale="v0", name="v0_sweep")
@@ -252,4 +487,8 @@ def reproduce(run_dir: str, out_dir: str, scene_dir: str = "run", run_missing: b
         figures.compare_speeds([runs["push"], runs["pull"]], out_dir, n=2, scale="c_r", name="push_vs_pull")
     with open(os.path.join(out_dir, "comparison.md"), "w") as fh:
         fh.write(markdown(comparison(runs)))
+    if variations:
+        rows = run_variations(runs, run_dir, scene_dir, run_missing, ranks)
+        with open(os.path.join(out_dir, "variations.md"), "w") as fh:
+            fh.write(variations_markdown(rows))
     return runs

@@ -49,10 +49,14 @@ def register(sub) -> None:
     a.add_argument("--knob", action="append", metavar="NAME",
                    help="only this knob (repeatable): " + ", ".join(KNOB_NAMES))
     a.add_argument("--quick", action="store_true", help="only the first variant of each knob")
-    a.add_argument("--duration", type=float, help="drive time in l/c_r (default: 32 for push/pull, 72 for shear: "
+    a.add_argument("--duration", type=float, help="drive time in l/c_r (default: 32 for push/pull, 76 for shear: "
                    "just past the first three nucleations)")
     a.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scene key in every run (TOML literal)")
+    a.add_argument("--repeat", type=int, default=1, help="runs per setting; each time reported is the smallest "
+                   "(default 1)")
+    a.add_argument("--redraw", action="store_true", help="run nothing: redraw accuracy.md and the Pareto plot "
+                   "from the accuracy.csv in --out")
     a.set_defaults(func=cmd_accuracy)
 
 
@@ -79,19 +83,21 @@ COMPARE_HELP = """Overlay the front speeds of several runs: v/v0 against x_tip/l
 pull (appendix D).  Also writes compare_speed.csv (mean speeds in c_r and / v0)."""
 
 
-KNOB_NAMES = ("time_step", "precision", "substrate_size", "substrate_model", "cadence")
+KNOB_NAMES = ("time_step", "precision", "substrate_size", "substrate_model", "cadence", "preset")
 
 ACCURACY_HELP = """Vary one fidelity knob at a time against its finest setting, each run through
 `parslip run` in a subprocess (snapshots off, drive shortened), and report per
 variant: wall time (s), and the error in first-break time (l/c_r) and site (l),
 nucleation interval (relative), mean speed of the first three fronts (relative),
 slip per front (relative) and the fraction of the intact-bond space-time map that
-disagrees.  Knobs: time_step (time.safety 0.9, 0.5, 0.25 against 0.1), precision
+disagrees.  Times: the whole subprocess, its time loop, and its drive phase (wall
+and CPU, from the run's log; the Pareto plot uses the drive-phase CPU time).
+Knobs: time_step (time.safety 0.9, 0.5, 0.25 against 0.1), precision
 (time.precision float32 against float64), substrate_size (2 l x 2 and 3 l x 2 top
 rows against 5 l x 4), substrate_model (material.bottom_kn 1e3, 1e4 and
 lattice.substrate = rigid against k_n = 100), cadence (output.interface_dt 1, 2,
-5 a/c_r against 0.25).  A knob whose key the engine refuses is reported as
-unavailable."""
+5 a/c_r against 0.25), preset (parslip.scene.presets QUICK_LOOK against
+PUBLICATION).  A knob whose key the engine refuses is reported as unavailable."""
 
 
 def _positive(name: str, value, accepted: str) -> None:
@@ -188,8 +194,18 @@ def cmd_accuracy(args) -> int:
     resolve(load_scene_file(args.scene), [parse_set(s) for s in args.set])     # bad scene: one line, exit 2
     _out_dir(args.out)
     setup_logging(0, 1)
-    rows = accuracy.study(args.scene, args.out, args.knob, args.quick, args.duration, args.set)
-    paths = accuracy.write_reports(rows, args.out)
+    if args.redraw:
+        csv = os.path.join(args.out, "accuracy.csv")
+        if not os.path.exists(csv):
+            raise ConfigError(f"--redraw: no {csv}; accepted: the --out of an earlier study")
+        with open(csv) as fh:
+            rows = accuracy.from_csv(fh.read())
+        for p in accuracy.write_reports(rows, args.out, title=os.path.basename(args.scene)):
+            print(p)
+        return 0
+    _positive("repeat", args.repeat, "accepted: an integer >= 1")
+    rows = accuracy.study(args.scene, args.out, args.knob, args.quick, args.duration, args.set, args.repeat)
+    paths = accuracy.write_reports(rows, args.out, title=os.path.basename(args.scene))
     print(accuracy.to_markdown(rows))
     for p in paths:
         print(p)

@@ -106,10 +106,11 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
                               f"many slabs as needed)"))
     out += _block("left out", [f"{item}: {text}" for item, text in budget.left_out(st, ranks)])
     out += _block("warnings", advice.warnings(st))
-    diff = presets.differences(s, presets.QUICK_LOOK)
-    if diff:
-        extra = "".join(f" --set {x}" for x in list(sets) + diff)
-        out.append(_line("quick look", f"parslip run {scene_path}{extra}"))
+    for name, preset in (("quick look", presets.QUICK_LOOK), ("publication", presets.PUBLICATION)):
+        diff = presets.differences(s, preset)
+        if diff:            # README "Error against run time": what each costs and how far it is off
+            extra = "".join(f" --set {x}" for x in list(sets) + diff)
+            out.append(_line(name, f"parslip run {scene_path}{extra}"))
     return out
 
 

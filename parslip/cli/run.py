@@ -249,7 +249,8 @@ def cmd_run(args, comm, bcast, load, out_path) -> int:
     finally:
         control.restore_signals()
     prog.done()
-    wall = time.monotonic() - t0
+    t_end, cpu_end = time.monotonic(), time.process_time()
+    wall = t_end - t0
     if scene["checkpoint.every"] or scene["checkpoint.wall"]:
         write_checkpoint(sim, ckpt_out, scene_toml, run_id, out)   # the end, to extend the run (drive.duration)
     writer.close("complete")
@@ -262,6 +263,11 @@ def cmd_run(args, comm, bcast, load, out_path) -> int:
         ups = steps * st.lattice.n_nodes / max(wall, 1e-9)
         log.info(f"done in {wall:.1f} s: {steps / max(wall, 1e-9):,.0f} steps/s, {ups / 1e6:.1f} M node-updates/s "
                  f"on {size} rank(s); {int(counts[0])} bond breaks, {int(counts[1])} re-formations")
+        if sim.drive_clock is not None:     # the drive alone: no start-up, no compilation, no settling
+            drive, cpu = t_end - sim.drive_clock[0], cpu_end - sim.drive_clock[1]
+            n_drive = sim.n - max(n_start, st.n_drive_start)
+            log.info(f"drive phase {drive:.3f} s ({cpu:.3f} s CPU): {n_drive} steps, "
+                     f"{n_drive / max(drive, 1e-9):,.0f} steps/s")
         iface = analysis.load_interface(out)
         print(analysis.summary(iface))
         png = os.path.splitext(out)[0] + "_spacetime.png"

@@ -10,6 +10,8 @@ Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
@@ -67,6 +69,7 @@ class Simulation:
                                cursor=np.array([0, 0, -1], np.int64))
         self.chunk = int(np.clip(CHUNK_UPDATES / max(self.state.n_owned, 1), 64, 200_000))
         self.n = 0
+        self.drive_clock = None          # (time.monotonic(), time.process_time()) at the drive's first step
         self._snap = {st.n_drive_start + k: j for j, k in enumerate(st.snapshot_steps)}
         self._snap_done = set()
         self.snapshots_total = len(self._snap)
@@ -142,8 +145,11 @@ class Simulation:
             if self.n >= end:
                 break
             target = min(end, self.n + chunk, min((k for k in self._snap if k > self.n), default=end),
-                         control.next_stop(self.n) if control is not None else end)
+                         control.next_stop(self.n) if control is not None else end,
+                         st.n_drive_start if self.n < st.n_drive_start else end)
             why = self.advance(target)
+            if self.drive_clock is None and self.n >= st.n_drive_start:
+                self.drive_clock = (time.monotonic(), time.process_time())
             if why == L.FRAMES_FULL:
                 self._flush(writer)
                 continue
