@@ -215,6 +215,25 @@ class Output:
             v.create_dataset(name, shape=shape, maxshape=(None,) + shape[1:], dtype=dt_,
                              chunks=(max(1, min(max(shape[0], 1), 1 << 16)),) + shape[1:], dcpl=_early())
         v["Steps"].attrs["NSteps"] = np.int64(0)
+        self._step_constants(0, S)
+
+    def _step_constants(self, k0: int, k1: int):
+        """Per-step constants of snapshots k0..k1-1 (one part, N points, M line cells, offsets into the flat
+        arrays), written at once when the file is made or grows: a snapshot then writes its data only."""
+        if not self.root or k1 <= k0:
+            return
+        v = self.f["VTKHDF"]
+        N, M = self.n_nodes, self.n_cells
+        k = np.arange(k0, k1, dtype=np.int64)
+        for name, val in (("NumberOfPoints", np.full(len(k), N)), ("NumberOfCells", np.full(len(k), M)),
+                          ("NumberOfConnectivityIds", np.full(len(k), 2 * M)), ("Steps/PartOffsets", k),
+                          ("Steps/NumberOfParts", np.ones(len(k), np.int64)), ("Steps/PointOffsets", k * N),
+                          ("Steps/CellOffsets", k * M), ("Steps/ConnectivityIdOffsets", k * 2 * M)):
+            v[name][k0:k1] = val
+        for name in ("velocity", "sxx", "syy", "sxy"):
+            v[f"Steps/PointDataOffsets/{name}"][k0:k1] = k * N
+        for name in ("interface", "intact"):
+            v[f"Steps/CellDataOffsets/{name}"][k0:k1] = k * M
 
     def _vtk_shapes(self, S: int) -> dict:
         """Shapes of the VTKHDF datasets for S snapshots (N points, M line cells each)."""
@@ -248,9 +267,11 @@ class Output:
                 if (per_frame and self.n_sites) or name == "time":
                     g[name].resize(nf, axis=0)
             if "VTKHDF" in f:
+                old = f["VTKHDF/NumberOfPoints"].shape[0]
                 for name, shape in self._vtk_shapes(self.sim.snapshots_total).items():
                     if name != "Steps/Values":
                         f["VTKHDF"][name].resize(shape[0], axis=0)
+                self._step_constants(old, self.sim.snapshots_total)
             f.attrs["status"] = "running"
             f.attrs["scene"] = to_toml(st.scene)
             f.attrs["n_ranks"] = self.size
@@ -291,16 +312,7 @@ class Output:
         self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
         if self.f is not None:
             v = self.f["VTKHDF"]
-            if self.root:             # the step's constants: one part, line cells, offsets into the flat arrays
-                for name, val in (("NumberOfPoints", N), ("NumberOfCells", M), ("NumberOfConnectivityIds", 2 * M),
-                                  ("Steps/PartOffsets", k), ("Steps/NumberOfParts", 1),
-                                  ("Steps/PointOffsets", k * N), ("Steps/CellOffsets", k * M),
-                                  ("Steps/ConnectivityIdOffsets", k * 2 * M)):
-                    v[name][k] = val
-                for name in ("velocity", "sxx", "syy", "sxy"):
-                    v[f"Steps/PointDataOffsets/{name}"][k] = k * N
-                for name in ("interface", "intact"):
-                    v[f"Steps/CellDataOffsets/{name}"][k] = k * M
+            if self.root:             # the step's line cells: offsets into its connectivity, and their type
                 v["Offsets"][k * (M + 1):(k + 1) * (M + 1)] = 2 * np.arange(M + 1, dtype=np.int64)
                 v["Types"][k * M:(k + 1) * M] = VTK_LINE
             v["Steps/Values"].resize((k + 1,))

@@ -71,22 +71,28 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext
     for i in range(bown0, bown1):
         exb_x[i] = zero
         exb_y[i] = zero
-    # 1. Breaks; the bonds that hold mark their substrate site taken.  Free sites are listed in ``claim``.
+    # 1. Breaks; the bonds that hold mark their substrate site taken and apply their force now (the
+    #    positions do not change within the step).  Free sites are listed in ``claim``.
     nfree = 0
     for j in range(tlo, thi):
         q = partner[j]
+        top_own = town0 <= j < town1
+        if top_own:
+            ext_x[j] = zero
+            ext_y[j] = zero
         if q >= 0:
             i = q - bbase
             if i < blo or i >= bhi:
-                if town0 <= j < town1 and reach[0] < 0:
+                if top_own and reach[0] < 0:
                     reach[0] = j + tbase
                 continue
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
             if dx * dx + dy * dy < db2:
                 taken[i] = 1
+                _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
                 continue
             partner[j] = -1
-            if town0 <= j < town1:
+            if top_own:
                 counters[BREAKS] += 1
         claim[nfree] = j
         nfree += 1
@@ -113,7 +119,7 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext
                 best = d2
                 got = i
         claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j        # site and claim in one integer
-    # 3. Grants in increasing site order (the free list is in site order).
+    # 3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once.
     zero_x0 = p[P_REFORM_ZERO] != 0
     for m in range(nfree):
         c = claim[m]
@@ -124,26 +130,19 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext
             continue
         taken[i] = 1
         partner[j] = i + bbase
-        if zero_x0:
-            x0[j] = zero
-        else:
-            x0[j] = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)[0]
-        if town0 <= j < town1:
-            counters[FORMS] += 1
-    # Forces of the bonds at u(t).
-    for j in range(tlo, thi):
-        q = partner[j]
-        i = q - bbase
+        dx, dy = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)
+        x0[j] = zero if zero_x0 else dx
         top_own = town0 <= j < town1
-        if q < 0 or i < blo or i >= bhi:
-            if top_own:
-                ext_x[j] = zero
-                ext_y[j] = zero
-            continue
-        bot_own = bown0 <= i < bown1
-        if not (top_own or bot_own):
-            continue
-        dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
+        _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
+        if top_own:
+            counters[FORMS] += 1
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y):
+    """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends."""
+    bot_own = bown0 <= i < bown1
+    if top_own or bot_own:
         fx = -kx * (dx - x0[j])
         fy = -ky * (dy - d0)
         if top_own:
