@@ -83,6 +83,7 @@ class Output:
     def __init__(self, path: str, sim, comm=None, provenance: dict | None = None, resume: str | None = None):
         """Create ``path`` for a new run, or with ``resume`` (the checkpoint's run id) reopen it to append."""
         self.sim, self.comm, self.path = sim, comm, path
+        self._handles = {}
         st, lay, lat = sim.setup, sim.layout, sim.setup.lattice
         self.rank = lay.rank
         self.size = lay.size
@@ -140,14 +141,22 @@ class Output:
     def _allgather(self, x):
         return [x] if self.comm is None or self.size == 1 else self.comm.allgather(x)
 
+    def _ds(self, name):
+        """Dataset ``name``, looked up once: a snapshot writes a dozen of them, and h5py's path lookup
+        costs about as much as writing a small one."""
+        ds = self._handles.get(name)
+        if ds is None:
+            ds = self._handles[name] = self.f[name]
+        return ds
+
     def _put(self, name, index, data):
         """Write my slice ``index`` (a tuple of slices) of dataset ``name``."""
         if self.mode == "mpio":
-            self.f[name][index] = data
+            self._ds(name)[index] = data
             return
         parts = [(index, data)] if self.size == 1 else self.comm.gather((index, data), root=0)
         if self.root:
-            ds = self.f[name]
+            ds = self._ds(name)
             for idx, d in parts:
                 if np.size(d):
                     ds[idx] = d
@@ -286,7 +295,7 @@ class Output:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         if self.f is not None:
             if self.root:
-                self.f["interface/time"][k0:k0 + count] = times
+                self._ds("interface/time")[k0:k0 + count] = times
             self.f["interface"].attrs["frames_written"] = k0 + count
 
     def snapshot(self, k, t, pos, vel, sig, partner):
@@ -329,5 +338,6 @@ class Output:
     def close(self, status: str = "complete"):
         if self.f is not None:
             self.f.attrs["status"] = status
+            self._handles = {}
             self.f.close()
             self.f = None
