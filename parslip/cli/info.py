@@ -109,7 +109,9 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
     for name, preset in (("quick look", presets.QUICK_LOOK), ("publication", presets.PUBLICATION)):
         diff = presets.differences(s, preset)
         if diff:            # README "Error against run time": what each costs and how far it is off
-            extra = "".join(f" --set {x}" for x in list(sets) + diff)
+            changed = {x.split("=", 1)[0] for x in diff}      # the preset's value replaces the user's
+            keep = [x for x in sets if x.split("=", 1)[0].strip() not in changed]
+            extra = "".join(f" --set {x}" for x in keep + diff)
             out.append(_line(name, f"parslip run {scene_path}{extra}"))
     return out
 
