@@ -126,6 +126,9 @@ def cmd_run(args) -> int:
     return run(args, _comm(), lambda fn: _bcast(_comm(), fn), load, _out_path)
 
 
+ABORT_GRACE_S = 1.0     # s: time for the launcher to forward a failing rank's traceback
+
+
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     if args.cmd == "run" and (refused := start_or_refuse()):   # before anything touches MPI
@@ -139,6 +142,11 @@ def main(argv=None) -> int:
             import traceback
             traceback.print_exc()
             sys.stderr.flush()
+            # The launcher's proxy forwards this rank's stderr asynchronously, and
+            # Abort kills the proxies: without a pause the message that says what
+            # went wrong is lost about one time in three (measured, both MPIs).
+            import time
+            time.sleep(ABORT_GRACE_S)
             _comm().Abort(1)
         raise
 
