@@ -40,7 +40,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import resource
 import sys
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -238,27 +241,94 @@ def steps_to(setup, t_lcr: float) -> int:
 
 
 # ----------------------------------------------------------------------------------------- measurement --
-def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "shear", log=print) -> list[dict]:
-    """Run ``parslip.bench.case`` for every size and rank count; each point keeps the fastest of ``repeats``.
+def _cpu_busy() -> float | None:
+    """CPU seconds every process on the machine has used since boot (/proc/stat: user, nice, system,
+    irq, softirq, steal); None where there is no /proc/stat."""
+    try:
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:]]
+    except (OSError, ValueError):
+        return None
+    return (v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / os.sysconf("SC_CLK_TCK")
 
-    The fastest, not the mean: on a shared machine other processes only ever slow a run down.
+
+def _children_cpu() -> float:
+    """CPU seconds of this process's finished descendants (the MPI ranks of the cases run so far)."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def machine_busy(probe: float = 1.0) -> float | None:
+    """Share of the machine's cores busy over ``probe`` seconds (0: idle, 1: every core), None off Linux."""
+    b0 = _cpu_busy()
+    if b0 is None:
+        return None
+    time.sleep(probe)
+    return (_cpu_busy() - b0) / (probe * (os.cpu_count() or 1))
+
+
+def wait_quiet(limit: float = 0.1, timeout: float = 300.0, log=print) -> float | None:
+    """Wait until at most ``limit`` of the cores are busy (others' work), or ``timeout`` s; returns the last share."""
+    t0 = time.monotonic()
+    busy = machine_busy()
+    told = False
+    while busy is not None and busy > limit and time.monotonic() - t0 < timeout:
+        if not told:
+            log(f"  machine {100 * busy:.0f} % busy; waiting for it to fall below {100 * limit:.0f} %")
+            told = True
+        time.sleep(2.0)
+        busy = machine_busy()
+    return busy
+
+
+def timed_case(l: int, ranks: int, seconds: float, mode: str) -> dict:
+    """One ``bench.case`` run, with the share of the cores others used meanwhile (``others_cpu``, 0..1).
+
+    others = (CPU the whole machine used - CPU of the case's processes) / (wall x cores), from
+    /proc/stat and the rusage of this process's children; None off Linux.
+    """
+    from .suite import case
+    b0, c0, t0 = _cpu_busy(), _children_cpu(), time.monotonic()
+    res = case(l, ranks, "float64", seconds, mode=mode)
+    b1, c1, wall = _cpu_busy(), _children_cpu(), time.monotonic() - t0
+    res["others_cpu"] = None if b0 is None else max(0.0, ((b1 - b0) - (c1 - c0)) / (wall * (os.cpu_count() or 1)))
+    return res
+
+
+def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "shear", quiet: float | None = 0.1,
+            tries: int = 4, log=print) -> list[dict]:
+    """Run ``parslip.bench.case`` for every size and rank count; each point keeps its fastest clean repeat.
+
+    The fastest, not the mean: on a shared machine other processes only ever slow a run down.  With
+    ``quiet`` (a share of the cores), each repeat waits until others use at most that much, and a
+    repeat during which others used more than ``quiet`` is done again (up to ``tries`` times), so the
+    points are of a machine to themselves as far as it can be had; every point records the others'
+    share of its best repeat (``others_cpu``) and whether it stayed under ``quiet`` (``clean``).
     Each point: l, ranks, us_per_step (and every repeat's), the case's JSON, and the model's features.
     """
     from ..scene.derive import derive
     from .case import scene_at
-    from .suite import case
     out = []
     for l in sizes:
         st = derive(scene_at(l, mode, "float64"))
         for r in ranks:
+            feats = features(rank_shares(st, r))
             runs = []
             for _ in range(repeats):
-                runs.append(case(l, r, "float64", seconds, mode=mode))
-            best = min(runs, key=lambda c: c["us_per_step"])
-            feats = features(rank_shares(st, r))
-            each = ", ".join(f"{c['us_per_step']:.1f}" for c in runs)
+                for _ in range(tries if quiet is not None else 1):
+                    if quiet is not None:
+                        wait_quiet(quiet, log=log)
+                    c = timed_case(l, r, seconds, mode)
+                    c["clean"] = quiet is None or c["others_cpu"] is None or c["others_cpu"] <= quiet
+                    runs.append(c)
+                    if c["clean"]:
+                        break
+            clean = [c for c in runs if c["clean"]] or runs
+            best = min(clean, key=lambda c: c["us_per_step"])
+            each = ", ".join(f"{c['us_per_step']:.1f}" + ("" if c["clean"] else " (busy)") for c in runs)
             log(f"l = {l}, {r} rank(s): {best['us_per_step']:.1f} us/step (repeats {each})")
-            out.append({"l": l, "ranks": r, "us_per_step": best["us_per_step"],
+            out.append({"l": l, "ranks": r, "us_per_step": best["us_per_step"], "clean": best["clean"],
+                        "others_cpu": best["others_cpu"],
                         "repeats_us_per_step": [c["us_per_step"] for c in runs], "features": feats, "case": best})
     return out
 
@@ -324,6 +394,9 @@ def main(argv=None) -> int:
     me.add_argument("--seconds", type=float, default=3.0)
     me.add_argument("--repeats", type=int, default=2)
     me.add_argument("--json", default="scaling.json")
+    me.add_argument("--quiet", type=float, default=0.1,
+                    help="wait for others to use at most this share of the cores, and redo a repeat during which "
+                         "they used more (default 0.1; 0 or less: measure whatever the load)")
     fi = sub.add_parser("fit", help="fit the model to measured points and predict")
     fi.add_argument("json")
     fi.add_argument("--terms", default="N,H,1", help="comma-separated features of the model (N, S, H, M, 1)")
@@ -343,7 +416,8 @@ def main(argv=None) -> int:
               f"farthest peer {max(s.hops for s in shares)} slabs away")
         return 0
     if a.cmd == "measure":
-        pts = measure(a.sizes, a.ranks, a.seconds, a.repeats, log=lambda m: print(m, file=sys.stderr, flush=True))
+        pts = measure(a.sizes, a.ranks, a.seconds, a.repeats, quiet=a.quiet if a.quiet > 0 else None,
+                      log=lambda m: print(m, file=sys.stderr, flush=True))
         with open(a.json, "w") as fh:
             json.dump(pts, fh, indent=1)
         print(f"wrote {a.json}")
