@@ -201,3 +201,28 @@ def test_cluster_prediction_adds_latency_and_bandwidth_and_hides_what_the_interi
                                                        throughput_ratio=2.0))
     interior = (1e-3 * 40_000 / 2 + 10.0) * (1 - 2000 / 80_000)
     assert slow["exposed_network_us"] == pytest.approx(6 * 20.0 + 1.6 - interior)
+
+
+def test_measure_keeps_the_fastest_clean_repeat_resumes_and_survives_a_timeout(tmp_path, monkeypatch):
+    """Cases stand in for bench.case: times given per (l, ranks) and repeat; a None is a case that timed out."""
+    times = {(100, 1): [12.0, 11.0], (100, 2): [None, None], (200, 1): [40.0, 41.0]}
+    calls = []
+
+    def fake(l, ranks, seconds, mode, timeout):
+        calls.append((l, ranks))
+        t = times[(l, ranks)][sum(1 for c in calls if c == (l, ranks)) - 1]
+        return None if t is None else {"us_per_step": t}
+
+    monkeypatch.setattr(scaling, "run_case", fake)
+    path = tmp_path / "points.json"
+    pts = scaling.measure([100], [1, 2], repeats=2, quiet=None, path=str(path), log=lambda m: None)
+    assert [(p["l"], p["ranks"], p["us_per_step"]) for p in pts] == [(100, 1, 11.0), (100, 2, None)]
+    assert pts[0]["features"] == {"N": 7000, "S": 100, "H": 0, "M": 0, "1": 1}   # 10 x 100 + 20 x 300 nodes
+    calls.clear()
+    again = scaling.measure([100, 200], [1], repeats=2, quiet=None, path=str(path),
+                            log=lambda m: None)
+    assert calls == [(200, 1), (200, 1)]                  # l = 100 was kept from the file, not measured again
+    assert [(p["l"], p["ranks"], p["us_per_step"]) for p in again] == [(100, 1, 11.0), (100, 2, None), (200, 1, 40.0)]
+    (tmp_path / "bench.json").write_text('{"cases": []}')
+    with pytest.raises(ValueError, match="not a file of scaling points"):
+        scaling.measure([100], [1], path=str(tmp_path / "bench.json"), log=lambda m: None)

@@ -42,6 +42,8 @@ import json
 import math
 import os
 import resource
+import signal
+import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
@@ -281,22 +283,45 @@ def wait_quiet(limit: float = 0.1, timeout: float = 300.0, log=print) -> float |
     return busy
 
 
-def timed_case(l: int, ranks: int, seconds: float, mode: str) -> dict:
+def run_case(l: int, ranks: int, seconds: float, mode: str, timeout: float) -> dict | None:
+    """``python -m parslip.bench.case`` under mpiexec in a session of its own; None if it ran past ``timeout`` s.
+
+    A case that runs too long (ranks spinning on an oversubscribed machine) is ended as a whole
+    process group, so no rank is left behind spinning.
+    """
+    from .suite import _mpiexec
+    cmd = [_mpiexec(), "-n", str(ranks), sys.executable, "-m", "parslip.bench.case", "--l", str(l), "--mode", mode,
+           "--precision", "float64", "--seconds", str(seconds)]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        return None
+    if p.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed:\n{err[-2000:]}")
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def timed_case(l: int, ranks: int, seconds: float, mode: str, timeout: float = 300.0) -> dict:
     """One ``bench.case`` run, with the share of the cores others used meanwhile (``others_cpu``, 0..1).
 
     others = (CPU the whole machine used - CPU of the case's processes) / (wall x cores), from
-    /proc/stat and the rusage of this process's children; None off Linux.
+    /proc/stat and the rusage of this process's children; None off Linux.  A case past ``timeout``
+    gives ``{"us_per_step": None, "timed_out": timeout}``.
     """
-    from .suite import case
     b0, c0, t0 = _cpu_busy(), _children_cpu(), time.monotonic()
-    res = case(l, ranks, "float64", seconds, mode=mode)
+    res = run_case(l, ranks, seconds, mode, timeout)
     b1, c1, wall = _cpu_busy(), _children_cpu(), time.monotonic() - t0
+    if res is None:
+        res = {"us_per_step": None, "timed_out": timeout}
     res["others_cpu"] = None if b0 is None else max(0.0, ((b1 - b0) - (c1 - c0)) / (wall * (os.cpu_count() or 1)))
     return res
 
 
 def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "shear", quiet: float | None = 0.1,
-            tries: int = 4, log=print) -> list[dict]:
+            tries: int = 4, timeout: float = 300.0, path: str | None = None, log=print) -> list[dict]:
     """Run ``parslip.bench.case`` for every size and rank count; each point keeps its fastest clean repeat.
 
     The fastest, not the mean: on a shared machine other processes only ever slow a run down.  With
@@ -305,31 +330,48 @@ def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "s
     points are of a machine to themselves as far as it can be had; every point records the others'
     share of its best repeat (``others_cpu``) and whether it stayed under ``quiet`` (``clean``).
     Each point: l, ranks, us_per_step (and every repeat's), the case's JSON, and the model's features.
+    With ``path``, the points are written there after each one, and points already there are kept
+    (a measurement stopped half-way continues).  A case past ``timeout`` s counts as a repeat with no
+    time; a point whose repeats all timed out has ``us_per_step`` None.
     """
     from ..scene.derive import derive
     from .case import scene_at
     out = []
+    if path and os.path.exists(path):
+        with open(path) as f:
+            out = json.load(f)
+        if not isinstance(out, list) or not all(isinstance(p, dict) and "ranks" in p for p in out):
+            raise ValueError(f"{path}: not a file of scaling points (a list of measured points); "
+                             f"accepted: a new path, or one an earlier measurement wrote")
+    done = {(p["l"], p["ranks"]) for p in out}
     for l in sizes:
         st = derive(scene_at(l, mode, "float64"))
         for r in ranks:
+            if (l, r) in done:
+                continue
             feats = features(rank_shares(st, r))
             runs = []
             for _ in range(repeats):
                 for _ in range(tries if quiet is not None else 1):
                     if quiet is not None:
                         wait_quiet(quiet, log=log)
-                    c = timed_case(l, r, seconds, mode)
+                    c = timed_case(l, r, seconds, mode, timeout)
                     c["clean"] = quiet is None or c["others_cpu"] is None or c["others_cpu"] <= quiet
                     runs.append(c)
                     if c["clean"]:
                         break
-            clean = [c for c in runs if c["clean"]] or runs
-            best = min(clean, key=lambda c: c["us_per_step"])
-            each = ", ".join(f"{c['us_per_step']:.1f}" + ("" if c["clean"] else " (busy)") for c in runs)
-            log(f"l = {l}, {r} rank(s): {best['us_per_step']:.1f} us/step (repeats {each})")
+            timed = [c for c in runs if c["us_per_step"] is not None]
+            clean = [c for c in timed if c["clean"]] or timed
+            best = min(clean, key=lambda c: c["us_per_step"]) if clean else runs[-1]
+            each = ", ".join(("timed out" if c["us_per_step"] is None else f"{c['us_per_step']:.1f}")
+                             + ("" if c["clean"] else " (busy)") for c in runs)
+            log(f"l = {l}, {r} rank(s): best {best['us_per_step']} us/step (repeats {each})")
             out.append({"l": l, "ranks": r, "us_per_step": best["us_per_step"], "clean": best["clean"],
                         "others_cpu": best["others_cpu"],
                         "repeats_us_per_step": [c["us_per_step"] for c in runs], "features": feats, "case": best})
+            if path:
+                with open(path, "w") as f:
+                    json.dump(out, f, indent=1)
     return out
 
 
@@ -393,7 +435,9 @@ def main(argv=None) -> int:
     me.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 3])
     me.add_argument("--seconds", type=float, default=3.0)
     me.add_argument("--repeats", type=int, default=2)
-    me.add_argument("--json", default="scaling.json")
+    me.add_argument("--json", default="scaling.json",
+                    help="where the points go, one by one; points already there are kept (default scaling.json)")
+    me.add_argument("--timeout", type=float, default=300.0, help="seconds after which a case is ended (default 300)")
     me.add_argument("--quiet", type=float, default=0.1,
                     help="wait for others to use at most this share of the cores, and redo a repeat during which "
                          "they used more (default 0.1; 0 or less: measure whatever the load)")
@@ -416,10 +460,8 @@ def main(argv=None) -> int:
               f"farthest peer {max(s.hops for s in shares)} slabs away")
         return 0
     if a.cmd == "measure":
-        pts = measure(a.sizes, a.ranks, a.seconds, a.repeats, quiet=a.quiet if a.quiet > 0 else None,
-                      log=lambda m: print(m, file=sys.stderr, flush=True))
-        with open(a.json, "w") as fh:
-            json.dump(pts, fh, indent=1)
+        measure(a.sizes, a.ranks, a.seconds, a.repeats, quiet=a.quiet if a.quiet > 0 else None, timeout=a.timeout,
+                path=a.json, log=lambda m: print(m, file=sys.stderr, flush=True))
         print(f"wrote {a.json}")
         return 0
     with open(a.json) as fh:
@@ -430,8 +472,9 @@ def main(argv=None) -> int:
 
 def report(pts, terms, exclude, targets, mode, cluster: Cluster, out=print) -> int:
     """Fit, the held-out points against the model, and the predictions, as text."""
-    used = [q for q in pts if q["ranks"] not in exclude]
-    held = [q for q in pts if q["ranks"] in exclude]
+    timed = [q for q in pts if q["us_per_step"] is not None]
+    used = [q for q in timed if q["ranks"] not in exclude]
+    held = [q for q in timed if q["ranks"] in exclude]
     f = fit(used, terms)
     out(fit_table(f))
     if held:

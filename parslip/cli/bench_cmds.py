@@ -49,10 +49,8 @@ def _scaling(args) -> int:
 
     from ..bench import scaling
     ranks = args.ranks or [1, 2, 3]
-    pts = scaling.measure(args.sizes, ranks, seconds=2.0 if args.quick else args.seconds,
+    pts = scaling.measure(args.sizes, ranks, seconds=2.0 if args.quick else args.seconds, path=args.json,
                           log=lambda m: print(m, file=sys.stderr, flush=True))
-    with open(args.json, "w") as f:
-        json.dump(pts, f, indent=1)
     cores = os.cpu_count() or 1
     scaling.report(pts, ("N", "H", "1"), [r for r in ranks if r > cores], ["2000:64"], "shear", scaling.Cluster())
     print(f"\n(written to {args.json})")
