@@ -358,7 +358,9 @@ def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "s
                     c = timed_case(l, r, seconds, mode, timeout)
                     c["clean"] = quiet is None or c["others_cpu"] is None or c["others_cpu"] <= quiet
                     runs.append(c)
-                    if c["clean"]:
+                    if c["clean"] or c["us_per_step"] is None:
+                        # A case ended at its timeout is not tried again: its ranks, killed before their
+                        # launcher waited for them, count as others' CPU, so "busy" says nothing there.
                         break
             timed = [c for c in runs if c["us_per_step"] is not None]
             clean = [c for c in timed if c["clean"]] or timed
