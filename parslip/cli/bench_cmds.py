@@ -9,12 +9,17 @@ def register(sub) -> None:
                                      "prints a table, writes JSON")
     b.add_argument("--sizes", type=int, nargs="+", default=[100, 500, 1000],
                    help="contact lengths l to measure, in a (the paper's geometry scaled; default 100 500 1000)")
-    b.add_argument("--ranks", type=int, nargs="+", default=[1, 2], help="MPI rank counts (default 1 2)")
+    b.add_argument("--ranks", type=int, nargs="+", default=None,
+                   help="MPI rank counts (default 1 2; with --scaling 1 2 3)")
     b.add_argument("--precision", nargs="+", default=["float64", "float32"], choices=["float64", "float32"])
     b.add_argument("--seconds", type=float, default=4.0, help="wall seconds of stepping per case (default 4)")
     b.add_argument("--quick", action="store_true", help="l = 100 and 500 only, 2 s per case")
     b.add_argument("--no-push", action="store_true", help="skip the whole-process time of run/push.toml")
     b.add_argument("--json", default="bench.json", help="where to write the results (default bench.json)")
+    b.add_argument("--scaling", action="store_true",
+                   help="instead: time per step at --sizes on --ranks, fit t_step = a N + b H + c (rank counts "
+                        "above the machine's cores kept out of the fit), predict l = 2000 on 64 ranks "
+                        "(parslip.bench.scaling)")
     b.set_defaults(func=cmd_bench)
 
 
@@ -22,6 +27,9 @@ def cmd_bench(args) -> int:
     import sys
 
     from ..bench import suite
+    if args.scaling:
+        return _scaling(args)
+    args.ranks = args.ranks or [1, 2]
     sizes = [s for s in args.sizes if not args.quick or s <= 500]
     seconds = 2.0 if args.quick else args.seconds
     res = suite.run(sizes=sizes, ranks=args.ranks, precisions=args.precision, seconds=seconds,
@@ -30,5 +38,20 @@ def cmd_bench(args) -> int:
     with open(args.json, "w") as f:
         json.dump(res, f, indent=1)
     print(suite.table(res))
+    print(f"\n(written to {args.json})")
+    return 0
+
+
+def _scaling(args) -> int:
+    """`parslip bench --scaling`: the measured points written to --json, the fit and prediction printed."""
+    import os
+    import sys
+
+    from ..bench import scaling
+    ranks = args.ranks or [1, 2, 3]
+    pts = scaling.measure(args.sizes, ranks, seconds=2.0 if args.quick else args.seconds, path=args.json,
+                          log=lambda m: print(m, file=sys.stderr, flush=True))
+    cores = os.cpu_count() or 1
+    scaling.report(pts, ("N", "H", "1"), [r for r in ranks if r > cores], ["2000:64"], "shear", scaling.Cluster())
     print(f"\n(written to {args.json})")
     return 0
