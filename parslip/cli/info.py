@@ -44,6 +44,7 @@ def _block(label: str, items: list[str]) -> list[str]:
 def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[str]:
     """The lines of `parslip info` for the derived scene ``st`` on ``ranks`` ranks."""
     from ..engine.memory import BASE, predict
+    from ..io.output import hdf5_mode
     s, lat, mat = st.scene, st.lattice, st.material
     top, bot = lat.top, lat.bottom
     n = lat.n_nodes
@@ -91,11 +92,14 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
     out.append(_line("cost", f"{ups:.4g} node-updates ({n} nodes x {st.n_steps} steps): about "
                              f"{_duration(budget.wall_seconds(st, ranks))} of time loop on {ranks} rank(s) at "
                              f"{rate / 1e6:.0f} M node-updates/s per rank ({st.precision}, measured by parslip bench)"))
-    mem = predict(st, ranks)
+    # The writer this Python's h5py would use at this rank count (io.output.hdf5_mode): the gathering
+    # writer's rank 0 holds every node's snapshot fields, the collective one spreads them.
+    writer = hdf5_mode(ranks)
+    mem = predict(st, ranks, gather=writer == "gather")
     big = max(range(ranks), key=lambda r: mem["per_rank"][r])
     out.append(_line("memory", f"{_mib(mem['per_rank'][big])} on the largest rank (rank {big}), "
                                f"{_mib(mem['total'])} in all on {ranks} rank(s): {mem['bytes_per_node']:.0f} B "
-                               f"per node beyond {_mib(BASE)} of process per rank"))
+                               f"per node beyond {_mib(BASE)} of process per rank (writer: {writer})"))
     ob = budget.output_bytes(st)
     out.append(_line("output", f"{st.n_frames} interface frames (every {st.frame_every} steps) {_mib(ob['interface'])}"
                                f" + {st.n_snapshots} snapshots {_mib(ob['snapshots'])} = {_mib(ob['total'])} "
