@@ -140,7 +140,12 @@ def main(argv=None) -> int:
         # in a collective forever: print it and take the whole job down.
         if args.cmd == "run" and _comm().Get_size() > 1:
             import traceback
+            comm = _comm()
             traceback.print_exc()
+            # Our own line: the MPI library's "MPI_Abort" notice races the launcher's shutdown and is
+            # sometimes lost, so the user would not learn why the other ranks stopped.
+            print(f"parslip {comm.Get_rank()}/{comm.Get_size()} ERROR: this rank failed; MPI_Abort(1) ends "
+                  f"every rank", file=sys.stderr)
             sys.stderr.flush()
             # The launcher's proxy forwards this rank's stderr asynchronously, and
             # Abort kills the proxies: without a pause the message that says what
