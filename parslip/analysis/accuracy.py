@@ -24,7 +24,6 @@ import math
 import os
 import re
 import subprocess
-import sys
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -187,11 +186,10 @@ def run_setting(scene: str, out: str, sets: dict, base_sets=(), repeat: int = 1)
 
 
 def _run_once(scene: str, out: str, sets: dict, base_sets=()) -> RunResult:
-    cmd = [sys.executable, "-m", "parslip", "run", scene, "--out", out, "--overwrite", "--quiet", "--no-png"]
-    for s in base_sets:
-        cmd += ["--set", s]
-    for k, v in sets.items():
-        cmd += ["--set", f"{k}={_toml(v)}"]
+    from ..parallel.launcher import python_command
+    items = [*base_sets, *(f"{k}={_toml(v)}" for k, v in sets.items())]
+    cmd = python_command("parslip", "run", scene, "--out", out, "--overwrite", "--quiet", "--no-png",
+                         *(x for s in items for x in ("--set", s)))
     t0 = time.monotonic()
     p = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.monotonic() - t0

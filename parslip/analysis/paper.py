@@ -18,7 +18,6 @@ import logging
 import math
 import os
 import subprocess
-import sys
 from dataclasses import dataclass
 from typing import Callable
 
@@ -206,8 +205,7 @@ CLAIMS: list[Claim] = [
     Claim("T+ pulse interval", "10.1 (from the Fig. 5 times)", "Fig. 5 caption",
           ("pull",), lambda r: interval(r["pull"]), "l/c_r"),
     Claim("T+ / T- pulse speed (first two pulses)", "0.5 (\"50% slower in pulling\")", "Appendix D",
-          ("push", "pull"), lambda r: (np.mean([steady_speed(f) for f in edge_fronts(r["pull"])[:2]])
-                                       / np.mean([steady_speed(f) for f in edge_fronts(r["push"])[:2]]))),
+          ("push", "pull"), lambda r: speed_ratio(r["pull"], r["push"])),
     Claim("T0 first break", "65.37", "Sec. 3.3.3", ("shear",), lambda r: first_break_time(r["shear"]), "l/c_r"),
     Claim("T0 nucleation site and direction", "x/l = 0, toward x/l = 1", "Sec. 3.3, Fig. 6b",
           ("shear",), lambda r: _directions(r["shear"])),
@@ -444,11 +442,10 @@ MAPS_ONLY = {"shear_maps": "shear"}     # role -> the role whose stress maps it 
 
 def run_scene(scene: str, out: str, ranks: int = 1, sets=()) -> int:
     """``parslip run scene --out out`` in a subprocess (under mpiexec for ranks > 1); returns its exit code."""
-    cmd = [sys.executable, "-m", "parslip", "run", scene, "--out", out, "--overwrite", "--quiet"]
-    for s in sets:
-        cmd += ["--set", s]
-    if ranks > 1:
-        cmd = ["mpiexec", "-n", str(ranks)] + cmd
+    from ..parallel.launcher import python_command
+    sets = [x for s in sets for x in ("--set", s)]
+    cmd = python_command("parslip", "run", scene, "--out", out, "--overwrite", "--quiet", *sets,
+                         ranks=ranks if ranks > 1 else None)
     return subprocess.run(cmd).returncode
 
 

@@ -289,9 +289,9 @@ def run_case(l: int, ranks: int, seconds: float, mode: str, timeout: float) -> d
     A case that runs too long (ranks spinning on an oversubscribed machine) is ended as a whole
     process group, so no rank is left behind spinning.
     """
-    from .suite import _mpiexec
-    cmd = [_mpiexec(), "-n", str(ranks), sys.executable, "-m", "parslip.bench.case", "--l", str(l), "--mode", mode,
-           "--precision", "float64", "--seconds", str(seconds)]
+    from ..parallel.launcher import python_command
+    cmd = python_command("parslip.bench.case", "--l", l, "--mode", mode, "--precision", "float64",
+                         "--seconds", seconds, ranks=ranks)
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         out, err = p.communicate(timeout=timeout)

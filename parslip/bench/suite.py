@@ -27,20 +27,16 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import time
+
+from ..parallel.launcher import python_command
 
 # Bytes a node update moves to and from memory beyond the caches: u(t) read, u(t-dt) read and u(t+dt)
 # written in its place, x and y each (neighbours come from cache): 6 values.
 BYTES_PER_VALUE = {"float64": 8, "float32": 4}
 VALUES_PER_UPDATE = 6
-
-
-def _mpiexec() -> str:
-    beside = os.path.join(os.path.dirname(sys.executable), "mpiexec")
-    return beside if os.access(beside, os.X_OK) else (shutil.which("mpiexec") or "mpiexec")
 
 
 def _run_json(cmd: list[str], timeout: float = 900) -> dict:
@@ -58,8 +54,8 @@ def stream(ranks: int) -> float:
 
 
 def case(l: int, ranks: int, precision: str, seconds: float, mode: str = "shear") -> dict:
-    return _run_json([_mpiexec(), "-n", str(ranks), sys.executable, "-m", "parslip.bench.case", "--l", str(l),
-                      "--mode", mode, "--precision", precision, "--seconds", str(seconds)])
+    return _run_json(python_command("parslip.bench.case", "--l", l, "--mode", mode, "--precision", precision,
+                                    "--seconds", seconds, ranks=ranks))
 
 
 def baseline(l: int, steps: int) -> float:
@@ -76,8 +72,8 @@ def time_to_result(scene: str, ranks: int, repeats: int = 3) -> float:
     walls = []
     with tempfile.TemporaryDirectory() as d:
         for i in range(repeats + 1):
-            cmd = [_mpiexec(), "-n", str(ranks), sys.executable, "-m", "parslip", "run", scene, "--out",
-                   os.path.join(d, "r.vtkhdf"), "--overwrite", "--quiet"]
+            cmd = python_command("parslip", "run", scene, "--out", os.path.join(d, "r.vtkhdf"), "--overwrite",
+                                 "--quiet", ranks=ranks)
             t = time.perf_counter()
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
             if p.returncode != 0:

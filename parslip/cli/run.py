@@ -205,7 +205,7 @@ def cmd_run(args, comm, bcast, load, out_path) -> int:
     sim = Simulation(st, comm)              # raises ConfigError on every rank alike
     run_id = plan["run_id"] or (comm.bcast(uuid.uuid4().hex if rank == 0 else None, root=0))
     if ckpt_in:
-        arrays, attrs = _read_checkpoint(ckpt_in, sim, rank)
+        arrays, attrs = ck.read(ckpt_in)       # every rank reads it, validated by rank 0 before
         sim.restore(arrays, attrs)
     prov = comm.bcast({"git_commit": git_commit(), "scene_file": os.path.abspath(args.scene),
                        "created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
@@ -310,7 +310,3 @@ def _plan(args, scene, out_path) -> dict:
             "run_id": str(attrs["run_id"])}
 
 
-def _read_checkpoint(path: str, sim, rank: int):
-    """Every rank reads the checkpoint's arrays (validated by rank 0 before)."""
-    from ..io import checkpoint as ck
-    return ck.read(path)

@@ -46,10 +46,8 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy step cursor")
 I_SIZE = 10
 # Float parameters ``fp`` (float64).
 F_DT, F_V0, F_FEXT, F_JUMP = range(4)
-F_SIZE = 4
 # State-type parameters ``sp``: C = dt^2/(1 + zeta dt/2), the factor on forces; 1 if zeta > 0.
 S_CF, S_DAMPED = range(2)
-S_SIZE = 2
 
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)

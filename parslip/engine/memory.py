@@ -41,6 +41,15 @@ WRITER_FIXED = 30 << 20
 WRITER_BYTES = 250
 SETUP_BYTES = 100
 OMEGA_BYTES = 1200
+FRAME_BUFFER_BYTES = 8 << 20     # interface frames held in memory between writes, per rank
+FRAME_SITE_BYTES = 37            # per site and frame: intact 1 + partner 4 + ux, uy, sxy, syy 8 each
+
+
+def frame_buffer(nsites: int, n_frames: int) -> int:
+    """Frames the interface buffer of a rank with ``nsites`` OWNED sites holds (``engine.loop.Frames``):
+    FRAME_BUFFER_BYTES worth, at least 16, at most the run's frames."""
+    per_frame = max(nsites, 1) * FRAME_SITE_BYTES + 8
+    return int(min(max(16, FRAME_BUFFER_BYTES // per_frame), n_frames))
 
 
 def predict(setup, ranks: int, gather: bool = True) -> dict:
@@ -59,7 +68,7 @@ def predict(setup, ranks: int, gather: bool = True) -> dict:
         c0, c1 = lay.col_range
         owned = int(lat.col_start[c1] - lat.col_start[c0])
         sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
-        frames = min(max(16, (8 << 20) // max(sites * 37 + 8, 1)), setup.n_frames) * (sites * 37 + 8)
+        frames = frame_buffer(sites, setup.n_frames) * (sites * FRAME_SITE_BYTES + 8)
         persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames
         transient = owned * SNAPSHOT_BYTES if snapshots else 0
         if rank == 0 and snapshots and (gather or ranks == 1):     # serial h5py writes every node here

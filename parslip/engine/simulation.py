@@ -22,12 +22,11 @@ from ..parallel.layout import PAD, build_layout, task_ranges
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
+from .memory import frame_buffer
 from .state import State
 
 # Work per compiled call, in node updates: about 0.3 s, so progress and output stay timely.
 CHUNK_UPDATES = 2e8
-# Interface frames held in memory before a block is written.
-FRAME_BUFFER_BYTES = 8 << 20
 # Steps between checks of the owned state and the agreement of all ranks on whether to stop.
 CHECK_EVERY = 256
 
@@ -61,8 +60,7 @@ class Simulation:
         self.gflags = np.zeros(L.L_SIZE, np.int64)
         self.timers = np.zeros(L.T_SIZE, np.int64)
         nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
-        per_frame = max(nsites, 1) * 37 + 8
-        cap = int(min(max(16, FRAME_BUFFER_BYTES // per_frame), st.n_frames))
+        cap = frame_buffer(nsites, st.n_frames)
         self.frames = L.Frames(intact=np.zeros((cap, nsites), np.uint8), partner=np.zeros((cap, nsites), np.int32),
                                ux=np.zeros((cap, nsites)), uy=np.zeros((cap, nsites)), sxy=np.zeros((cap, nsites)),
                                syy=np.zeros((cap, nsites)), step=np.zeros(cap, np.int64),
@@ -71,7 +69,6 @@ class Simulation:
         self.n = 0
         self.drive_clock = None          # (time.monotonic(), time.process_time()) at the drive's first step
         self._snap = {st.n_drive_start + k: j for j, k in enumerate(st.snapshot_steps)}
-        self._snap_done = set()
         self.snapshots_total = len(self._snap)
         self.snapshots_written = 0
         self.last_frame_step = -1
@@ -124,7 +121,7 @@ class Simulation:
         n = self.n if n is None else n
         return self.state.potential_energy(n, self.load_factor(n) if load is None else load)
 
-    def run(self, writer=None, progress=None, until: int | None = None, control=None):
+    def run(self, writer=None, until: int | None = None, control=None):
         """Advance to step ``until`` (default: the end), writing frames and snapshots on the way.
 
         ``control`` (``cli.run.RunControl``) is asked between calls of the compiled loop, on every
@@ -155,8 +152,6 @@ class Simulation:
                 continue
             if why == L.STOPPED:
                 self._fail(writer)
-            if progress is not None:
-                progress.update(self.n)
         self.advance(self.n)                 # the frame of the last step, if it is one
         self._flush(writer)
         return None
@@ -187,10 +182,6 @@ class Simulation:
         fr.cursor[L.C_BASE] += count
         fr.cursor[L.C_COUNT] = 0
 
-    def flush(self, writer):
-        """Write the frames held in memory (before a checkpoint or a stop)."""
-        self._flush(writer)
-
     # ----------------------------------------------------------- checkpoints --
     def checkpoint_parts(self) -> dict:
         """This rank's share of a checkpoint (``io.checkpoint``), by global id: node and site arrays."""
@@ -199,8 +190,8 @@ class Simulation:
         d0 = np.zeros(s.n_owned, s.dtype)
         top = s.own_block == TOP
         d0[top] = s.drive0[s.own_prow[top], s.own_j[top]]
-        lvl = self.state.level
-        parts = {"gid": s.gid, "u": self._owned(lvl(self.n)), "u_prev": self._owned(lvl(self.n - 1)), "drive0": d0}
+        parts = {"gid": s.gid, "u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
+                 "drive0": d0}
         if lat.has_interface:
             sl = s.owned_sites()
             parts.update(site=np.arange(sl.stop - sl.start) + s.site0(), partner=s.iface.partner[sl].copy(),
@@ -208,17 +199,6 @@ class Simulation:
         else:
             parts.update(site=np.zeros(0, np.int64), partner=np.zeros(0, np.int64), x0=np.zeros(0, s.dtype))
         return parts
-
-    def _owned(self, level) -> np.ndarray:
-        """OWNED (n_owned, 2) of one level, in the state's float type (bitwise)."""
-        s = self.state
-        bx, by, tx, ty = level
-        out = np.zeros((s.n_owned, 2), s.dtype)
-        for b, (ax, ay) in ((0, (bx, by)), (1, (tx, ty))):
-            m = s.own_block == b
-            out[m, 0] = ax[s.own_prow[m], s.own_j[m]]
-            out[m, 1] = ay[s.own_prow[m], s.own_j[m]]
-        return out
 
     def restore(self, arrays: dict, attrs: dict):
         """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
@@ -228,12 +208,7 @@ class Simulation:
         s, st = self.state, self.setup
         self.n = n = int(attrs["step"])
         for level, name in ((n, "u"), (n - 1, "u_prev")):
-            bx, by, tx, ty = s.level(level)
-            u = arrays[name][s.gid]
-            for b, (ax, ay) in ((0, (bx, by)), (1, (tx, ty))):
-                m = s.own_block == b
-                ax[s.own_prow[m], s.own_j[m]] = u[m, 0]
-                ay[s.own_prow[m], s.own_j[m]] = u[m, 1]
+            s.set_owned_u(level, arrays[name][s.gid])
         top = s.own_block == TOP
         s.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
         if st.lattice.has_interface:
@@ -273,9 +248,8 @@ class Simulation:
 
     def _snapshot(self, writer):
         j = self._snap.get(self.n)
-        if j is None or self.n in self._snap_done:
+        if j is None or j < self.snapshots_written:      # not a snapshot step, or written already
             return
-        self._snap_done.add(self.n)
         self.snapshots_written = j + 1
         if writer is None:
             return

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.lattice import BOTTOM, DIRECTIONS, TOP
-from ..model.physics import DENSITY, ROW_HEIGHT
+from ..model.physics import DENSITY
 from ..parallel.layout import PAD
 from .kernels import interface as ik
 from .loop import Iface, Levels
@@ -96,39 +96,14 @@ class State:
     def _index_owned(self):
         """(block, row, local column) of every OWNED node, in global id order (column by column, substrate
         rows first), and the reference positions (a)."""
-        lay, lat = self.layout, self.setup.lattice
-        c0, c1 = lay.col_range
-        blk, row, col = [], [], []
-        for b in (BOTTOM, TOP):
-            if not lat.numbered[b]:
-                continue
-            B = lat.blocks[b]
-            cols = np.arange(max(c0, B.col0), min(c1, B.col0 + B.cols))
-            if len(cols) == 0:
-                continue
-            rr, cc = np.meshgrid(np.arange(B.rows), cols)
-            blk.append(np.full(rr.size, b))
-            row.append(rr.ravel())
-            col.append(cc.ravel())
-        if blk:
-            blk, row, col = (np.concatenate(v).astype(np.int64) for v in (blk, row, col))
-            order = np.lexsort((row, blk, col))          # by column, then block, then row
-            blk, row, col = blk[order], row[order], col[order]
-        else:
-            blk = row = col = np.zeros(0, np.int64)
-        self.own_block, self.own_row, self.own_col = blk, row, col
+        lay = self.layout
+        nd = self.setup.lattice.nodes_in_columns(*lay.col_range)
+        blk, row, col = nd["block"], nd["row"], nd["col"]
+        self.own_block, self.own_row, self.own_col, self.gid = blk, row, col, nd["gid"]
+        self.ref_x, self.ref_y = nd["x"], nd["y"]
         bases = np.array([lay.blocks[BOTTOM].base, lay.blocks[TOP].base])
         self.own_j = col - bases[blk] if len(blk) else col
         self.own_prow = row + PAD
-        self.gid = lat.gid(blk, row, col) if len(blk) else np.zeros(0, np.int64)
-        ref_x = np.empty(len(blk))
-        ref_y = np.empty(len(blk))
-        for b in (BOTTOM, TOP):
-            m = blk == b
-            B = lat.blocks[b]
-            ref_x[m] = col[m] + B.offset(row[m])
-            ref_y[m] = B.y0 + row[m] * ROW_HEIGHT
-        self.ref_x, self.ref_y = ref_x, ref_y
 
     @property
     def n_owned(self) -> int:
@@ -150,10 +125,11 @@ class State:
         lv = self.levels
         return (lv.bx0, lv.by0, lv.tx0, lv.ty0) if n % 2 == 0 else (lv.bx1, lv.by1, lv.tx1, lv.ty1)
 
-    def owned_u(self, n: int) -> np.ndarray:
-        """u(n) of the OWNED nodes, (n_owned, 2) float64 in global id order (a)."""
+    def owned_u(self, n: int, dtype=np.float64) -> np.ndarray:
+        """u(n) of the OWNED nodes, (n_owned, 2) in global id order (a); in the state's own float type
+        (``dtype=self.dtype``) it is bitwise, as a checkpoint needs."""
         bx, by, tx, ty = self.level(n)
-        out = np.zeros((self.n_owned, 2))
+        out = np.zeros((self.n_owned, 2), dtype)
         for b, (ax, ay) in ((BOTTOM, (bx, by)), (TOP, (tx, ty))):
             m = self.own_block == b
             out[m, 0] = ax[self.own_prow[m], self.own_j[m]]

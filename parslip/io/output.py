@@ -97,6 +97,9 @@ class Output:
         self.site0 = state.site0() if lat.has_interface else 0
         c0, c1 = lay.col_range
         self.bulk_cells = _bulk_cells(lat, c0, c1)
+        # The bulk cells' constant fields (not interface, intact), written with each snapshot.
+        self._bulk_zeros = np.zeros(len(self.bulk_cells), np.uint8)
+        self._bulk_ones = np.ones(len(self.bulk_cells), np.uint8)
         counts = self._allgather(len(self.bulk_cells))
         self.cell0 = int(sum(counts[:self.rank]))
         self.n_bulk_cells = int(sum(counts))
@@ -243,6 +246,12 @@ class Output:
             v[f"Steps/PointDataOffsets/{name}"][k0:k1] = k * N
         for name in ("interface", "intact"):
             v[f"Steps/CellDataOffsets/{name}"][k0:k1] = k * M
+        # Every step's cells are lines: offsets into its connectivity, and their type (one step at a time,
+        # so no array of all the steps' cells is ever held).
+        offsets, types = 2 * np.arange(M + 1, dtype=np.int64), np.full(M, VTK_LINE, np.uint8)
+        for j in range(k0, k1):
+            v["Offsets"][j * (M + 1):(j + 1) * (M + 1)] = offsets
+            v["Types"][j * M:(j + 1) * M] = types
 
     def _vtk_shapes(self, S: int) -> dict:
         """Shapes of the VTKHDF datasets for S snapshots (N points, M line cells each)."""
@@ -309,8 +318,8 @@ class Output:
         nb = len(self.bulk_cells)
         c0 = k * M + self.cell0
         self._put("VTKHDF/Connectivity", (slice(2 * c0, 2 * (c0 + nb)),), self.bulk_cells.ravel())
-        self._put("VTKHDF/CellData/interface", (slice(c0, c0 + nb),), np.zeros(nb, np.uint8))
-        self._put("VTKHDF/CellData/intact", (slice(c0, c0 + nb),), np.ones(nb, np.uint8))
+        self._put("VTKHDF/CellData/interface", (slice(c0, c0 + nb),), self._bulk_zeros)
+        self._put("VTKHDF/CellData/intact", (slice(c0, c0 + nb),), self._bulk_ones)
         ns = len(partner)
         other = self.bottom_gid_of_site(np.maximum(partner, 0))
         other = np.where((partner >= 0) & (other >= 0), other, self.top_gid)
@@ -321,9 +330,6 @@ class Output:
         self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
         if self.f is not None:
             v = self.f["VTKHDF"]
-            if self.root:             # the step's line cells: offsets into its connectivity, and their type
-                v["Offsets"][k * (M + 1):(k + 1) * (M + 1)] = 2 * np.arange(M + 1, dtype=np.int64)
-                v["Types"][k * M:(k + 1) * M] = VTK_LINE
             v["Steps/Values"].resize((k + 1,))
             if self.root:
                 v["Steps/Values"][k] = t

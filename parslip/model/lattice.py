@@ -131,16 +131,20 @@ class Lattice:
         """All nodes with global column in [c0, c1), ordered by global id."""
         c0, c1 = max(c0, 0), min(c1, self.ncols)
         blk, row, col = [], [], []
-        for c in range(c0, c1):
-            for bi, b in enumerate(self.blocks):
-                if self.numbered[bi] and b.col0 <= c < b.col0 + b.cols:
-                    blk.append(np.full(b.rows, bi))
-                    row.append(np.arange(b.rows))
-                    col.append(np.full(b.rows, c))
+        for bi, b in enumerate(self.blocks):
+            cols = np.arange(max(c0, b.col0), min(c1, b.col0 + b.cols))
+            if not self.numbered[bi] or len(cols) == 0:
+                continue
+            rr, cc = np.meshgrid(np.arange(b.rows), cols)
+            blk.append(np.full(rr.size, bi))
+            row.append(rr.ravel())
+            col.append(cc.ravel())
         if not blk:
             e = np.zeros(0, np.int64)
             return dict(gid=e, block=e, row=e, col=e, x=np.zeros(0), y=np.zeros(0))
         blk, row, col = (np.concatenate(v).astype(np.int64) for v in (blk, row, col))
+        order = np.lexsort((row, blk, col))              # global id order: by column, then block, then row
+        blk, row, col = blk[order], row[order], col[order]
         x = np.empty(len(blk))
         y = np.empty(len(blk))
         for bi, b in enumerate(self.blocks):

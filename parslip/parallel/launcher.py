@@ -39,6 +39,20 @@ OPENMPI, MPICH = "Open MPI", "MPICH"
 BATCH_STEPS = ("batch", "extern", "4294967294", "4294967295")
 
 
+def python_command(module: str, *args, ranks: int | None = None) -> list[str]:
+    """argv of ``python -m module ARGS`` with this interpreter; with ``ranks``, under ``mpiexec -n ranks``:
+    the mpiexec beside the interpreter (the ``mpich`` wheel's, or a venv's), which belongs to the MPI this
+    Python's mpi4py loads, else the first on PATH.  Used by everything that starts parslip itself
+    (benchmarks, the accuracy study, the paper's runs)."""
+    cmd = [sys.executable, "-m", module, *map(str, args)]
+    if ranks is None:
+        return cmd
+    import shutil
+    beside = os.path.join(os.path.dirname(sys.executable), "mpiexec")
+    mpiexec = beside if os.access(beside, os.X_OK) else (shutil.which("mpiexec") or "mpiexec")
+    return [mpiexec, "-n", str(ranks), *cmd]
+
+
 class LauncherError(ConfigError):
     """A launcher that does not fit mpi4py's MPI; ``speak`` is False on all but the launcher's process 0."""
 
