@@ -55,12 +55,12 @@ def _nearest_free(sim, j, taken):
     s = sim.state
     bx, by, tx, ty = s.level(sim.n)
     g = s.iface.geom
-    br = int(g[ik.G_BROW])
+    br = g.brow
     d0 = sim.setup.scene["interface.delta0"]
-    gcol = j + g[ik.G_TBASE]
+    gcol = j + g.tbase
     best, who = np.inf, -1
-    for i in range(int(g[ik.G_BLO]), int(g[ik.G_BHI])):
-        q = i + g[ik.G_BBASE]
+    for i in range(g.blo, g.bhi):
+        q = i + g.bbase
         if taken[i]:
             continue
         dx = (gcol - q) + (tx[1, j] - bx[br, i])
@@ -86,22 +86,22 @@ def test_wide_gap_rebonds_to_the_nearest_free_site_even_two_columns_away():
         _, _, tx, _ = s.level(sim.n)
         ux = tx[1].copy()
         sim.step()
-        lo, hi = int(g[ik.G_TLO]), int(g[ik.G_THI])
+        lo, hi = g.tlo, g.thi
         new = [j for j in range(lo, hi) if s.iface.partner[j] >= 0 and s.iface.partner[j] != partner_before[j]]
         if not new:
             continue
         # Recompute the claims at the state the step started from (level n - 1 now holds u(n - 1)).
         sim.n -= 1
-        taken = np.zeros(int(g[ik.G_BHI]) + 1, bool)
+        taken = np.zeros(g.bhi + 1, bool)
         for j in range(lo, hi):
             p = s.iface.partner[j]
             if p >= 0 and j not in new:
-                taken[p - g[ik.G_BBASE]] = True
+                taken[p - g.bbase] = True
         for j in new:
             assert s.iface.partner[j] == _nearest_free(sim, j, taken), j
-            taken[s.iface.partner[j] - g[ik.G_BBASE]] = True
+            taken[s.iface.partner[j] - g.bbase] = True
             formed += 1
-            far += abs(s.iface.partner[j] - round(j + g[ik.G_TBASE] + ux[j])) >= 2
+            far += abs(s.iface.partner[j] - round(j + g.tbase + ux[j])) >= 2
         sim.n += 1
     assert formed > 10 and far > 0, (formed, far)
 
@@ -127,15 +127,13 @@ def test_a_bond_out_of_reach_is_caught_not_skipped():
     sim = simulation(SMALL)
     s = sim.state
     g = s.iface.geom
-    j = int(g[ik.G_TOWN0]) + 3
-    s.iface.partner[j] = int(g[ik.G_BBASE] + g[ik.G_BHI]) + 5          # beyond the stored substrate columns
+    j = g.town0 + 3
+    s.iface.partner[j] = int(g.bbase + g.bhi) + 5          # beyond the stored substrate columns
     bx, by, tx, ty = s.level(0)
-    br = int(g[ik.G_BROW])
+    br = g.brow
     s.iface.reach[0] = -1
-    ik.update(tx[1], ty[1], bx[br], by[br], s.iface.partner, s.iface.x0, s.iface.taken, s.iface.claim, g,
-              s.iface.consts, s.iface.counters, s.iface.reach, s.iface.ext_x, s.iface.ext_y, s.iface.exb_x,
-              s.iface.exb_y)
-    assert s.iface.reach[0] == j + g[ik.G_TBASE]
+    ik.update(tx[1], ty[1], bx[br], by[br], s.iface)
+    assert s.iface.reach[0] == j + g.tbase
 
 
 def test_rigid_substrate_static_gap_and_no_substrate_nodes():

@@ -51,8 +51,8 @@ def _mean_gap(sim):
     if not lat.rigid:
         g = sim.state.iface.geom
         from parslip.engine.kernels import interface as ik
-        cols = np.arange(s.start, s.stop) + int(g[ik.G_TBASE]) - int(g[ik.G_BBASE])
-        gap = gap - by[int(g[ik.G_BROW]), cols]
+        cols = np.arange(s.start, s.stop) + g.tbase - g.bbase
+        gap = gap - by[g.brow, cols]
     return gap
 
 

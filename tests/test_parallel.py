@@ -15,7 +15,8 @@ import pytest
 from helpers import SMALL, WRITERS, datasets, require, run_cli, scene, small_toml
 from parslip.engine.simulation import Simulation
 from parslip.model.lattice import Lattice
-from parslip.parallel.exchange import COMPLETE, POST, build_plan, exchange
+from parslip.parallel.exchange import COMPLETE, POST, build_plan
+from parslip.parallel.halo_mpi import mpi_exchange as exchange
 from parslip.parallel.layout import PAD, build_layout, column_cost, interface_reach, partition
 from parslip.scene.derive import derive
 

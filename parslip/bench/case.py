@@ -89,7 +89,7 @@ def main():
     sim.run(writer, until=sim.n + 200)
     per_step = comm.allreduce(time.perf_counter() - t, op=MPI.MAX) / 200
     steps = int(max(200, a.seconds / per_step))
-    sim.timers[:] = 0
+    sim.diag.timers[:] = 0
     c0 = sim.counters.copy()
     writer.seconds, writer.frames = 0.0, 0
     comm.Barrier()
@@ -98,7 +98,7 @@ def main():
     comm.Barrier()
     wall = time.perf_counter() - t
     out.close()
-    tm = sim.timers.astype(float)
+    tm = sim.diag.timers.astype(float)
     samples = max(tm[L.T_SAMPLES], 1)
     phases = {name: tm[i] / samples / 1e3 for i, name in ((L.T_IFACE, "interface"), (L.T_EARLY, "early_tasks"),
                                                           (L.T_POST, "post"), (L.T_LATE, "other_tasks"),

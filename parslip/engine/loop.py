@@ -1,4 +1,4 @@
-"""The compiled time loop: many Verlet steps per call, between which Python writes output.
+"""The compiled time loop: many Verlet steps per call, between which Python agrees, writes and checks.
 
 Responsible for the order of one step and the load phases (ramp F_N, settle
 with damping, drive), and for stopping where Python must act: the end of the
@@ -12,15 +12,32 @@ u(n-1) and receives u(n+1)):
  1. record interface frame k if n is its step (u(n), bonds as they entered);
  2. interface bonds: break, re-form, forces (``kernels.interface``), on every
     local interface site, OWNED and HALO; check that the halo still covers them;
- 3. the schedule's early tasks: the rows and columns peers keep as HALO;
+ 3. the schedule's EARLY tasks: the rows and columns peers keep as HALO;
  4. ``exchange(POST)``: send them with the bond state, post the receives;
- 5. the remaining tasks, while messages travel;
+ 5. the LATE tasks, while messages travel;
  6. ``exchange(COMPLETE)``: HALO copies now hold u(n+1) and the bonds of step n.
 
-Every ``check_every`` steps the loop checks the state it owns and all ranks
-agree (``exchange(REDUCE)``) whether to stop; they stop at the same step.
-The exchange plan is passed in: on one rank it has no peers and no
-communicator, and the exchange does nothing.
+A driven node is first updated like any other; the drive then sets its x to
+the prescribed value and keeps the force that took (``drive_force``).
+
+The rule for collective decisions.  Everything after which a rank enters an
+MPI collective (a write of frames or a snapshot, a checkpoint, a stop) must
+happen at the same step on every rank.  So ``advance`` returns only where
+every rank returns:
+  - at ``n1``, which the caller computes from data every rank holds (the
+    agreed chunk, the snapshot steps, the checkpoint steps);
+  - FRAMES_FULL, when the frame buffer is full: its capacity is the same on
+    every rank (sized from the largest slab's site count, ``Simulation``),
+    and frames are recorded at the same steps everywhere;
+  - STOPPED, when the flags, agreed every ``check_every`` steps with one
+    ``exchange(REDUCE)``, say some rank found a problem.
+The exchange plan is passed in: on one rank it is a ``NullPlan`` and every
+exchange is a no-op that links no MPI (``parallel.exchange``).
+
+Parameters travel as named tuples (``Params``, ``Schedule``, ``Iface``,
+``Frames``, ``Diag``), never as numbered slots; the few int arrays that must
+be arrays (flags reduced over MPI, timers, the frame cursor, the heartbeat)
+are indexed by the named constants below.
 """
 from collections import namedtuple
 
@@ -28,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from ..parallel.exchange import COMPLETE, POST, PROGRESS, REDUCE, exchange
-from ..parallel.layout import ALL_BONDS, FULL, NO_DOWN, PAD
+from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, NO_DOWN, NODES, PAD, ROWS
 from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
@@ -36,18 +53,31 @@ from .kernels.stencil import node_masked, row_edge, row_full
 
 # State: each block as [row, column] arrays, x and y apart, at two Verlet levels.
 Levels = namedtuple("Levels", "bx0 by0 bx1 by1 tx0 ty0 tx1 ty1")
-# Interface arrays, indexed by local column of the block's row 0 (top) or the substrate's interface row.
-Iface = namedtuple("Iface", "partner x0 claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach")
-# Interface frame buffer: ``cap`` frames of the OWNED top sites.
-Frames = namedtuple("Frames", "intact partner ux uy sxy syy step cursor")
-
-# Integer parameters ``ip``.
-(I_NRAMP, I_NDS, I_DRIVE, I_FRAME_EVERY, I_NFRAMES, I_CHECK, I_HAS_IFACE, I_RIGID, I_BROW, I_FOFF) = range(10)
-I_SIZE = 10
-# Float parameters ``fp`` (float64).
-F_DT, F_V0, F_FEXT, F_JUMP = range(4)
-# State-type parameters ``sp``: C = dt^2/(1 + zeta dt/2), the factor on forces; 1 if zeta > 0.
-S_CF, S_DAMPED = range(2)
+# One level: (bx, by, tx, ty).
+Level = namedtuple("Level", "bx by tx ty")
+# The row schedule (``parallel.layout``): tasks of TASK_DTYPE and ptr[phase, block, ROWS | NODES | END].
+Schedule = namedtuple("Schedule", "tasks ptr")
+# The drive: drive0, the x of the top block's nodes when the drive started; index[prow, j] the slot of a
+# driven node in ``force`` (-1 not driven); force, the x-force the drive applied to each in the last step.
+Drive = namedtuple("Drive", "drive0 index force")
+# Interface frame buffer: ``cap`` frames of the OWNED top sites (``kernels.interface.record``), the drive
+# force of each OWNED driven node, the step of each frame, and the cursor [C_BASE, C_COUNT, C_LAST].
+Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive step cursor")
+# What the loop reports: flags (this rank's first problem), gflags (their MAX over the ranks), timers
+# (ns per phase), beat (BEAT_STEP: the step the loop last passed, read by the monitor thread).
+Diag = namedtuple("Diag", "flags gflags timers beat")
+# Scalars of one run (``Simulation.params``):
+#   n_ramp, n_drive_start   steps of the F_N ramp, and the first drive step
+#   drive                   the scene has a drive (mode != none)
+#   frame_every, n_frames   interface frame cadence (steps) and frames in this run
+#   frame_offset            index in the file of this run's frame 0 (a restart may change the cadence)
+#   check_every             steps between checks and agreements of the flags
+#   has_iface, rigid        an interface exists; the substrate is rigid
+#   brow                    array row of the substrate's interface row
+#   dt, v0, fext, jump      time step (a/c), drive speed (a c/a), load per node at full F_N, runaway limit (a)
+#   cf, inv_cf, damped      C = dt^2/(1 + zeta dt/2) in the state's float type, 1/C, zeta > 0
+Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
+                              "rigid brow dt v0 fext jump cf inv_cf damped")
 
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)
@@ -64,6 +94,10 @@ T_IFACE, T_EARLY, T_POST, T_LATE, T_COMPLETE, T_CHECK, T_FRAMES, T_SAMPLES, T_CL
 T_SIZE = 11
 TIME_EVERY = 16
 
+# Heartbeat: the step the loop last passed (every check), read without locks by the monitor thread.
+BEAT_STEP, BEAT_IN_LOOP = 0, 1
+BEAT_SIZE = 2
+
 # Why ``advance`` returned.
 DONE, FRAMES_FULL, STOPPED = 0, 1, 2
 
@@ -79,61 +113,73 @@ def _flag(flags, bit, step, block, row, col, value):
     flags[L_BITS] |= bit
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def _drive(px, r, j, drive, shift, inv_cf):
+    """Set driven node (r, j) to its prescribed x; keep the force that took: (x_drive - x_free) / C."""
+    target = drive.drive0[r, j] + shift
+    drive.force[drive.index[r, j]] = (target - px[r, j]) * inv_cf
+    px[r, j] = target
+
+
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _rows(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, zeros, drive0, drive_on, shift, gy):
+def _rows(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy):
     """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN)."""
-    cf = sp[S_CF]
-    damped = sp[S_DAMPED] != 0
+    cf = prm.cf
+    damped = prm.damped
     zero = like(0, cf)
     for t in range(t0, t1):
-        b, r, j0, n, kind, extra, load, drive, s = (tasks[t, 0], tasks[t, 1], tasks[t, 2], tasks[t, 3],
-                                                    tasks[t, 4], tasks[t, 6], tasks[t, 7], tasks[t, 8], tasks[t, 10])
-        g = gy if load else zero
-        if kind == FULL:
-            row_full(cx, cy, px, py, r, j0, n, s, K, b, damped)
-        elif extra:
-            row_edge(cx, cy, px, py, r, j0, n, s, K, b, damped, kind == NO_DOWN, cf, ex, ey, zero, g)
+        tk = tasks[t]
+        r, j0, n, s = tk.row, tk.j0, tk.n, tk.s
+        g = gy if tk.load else zero
+        if tk.kind == FULL:
+            row_full(cur_x, cur_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped)
+        elif tk.extra:
+            row_edge(cur_x, cur_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf, ex, ey,
+                     zero, g)
         else:
-            row_edge(cx, cy, px, py, r, j0, n, s, K, b, damped, kind == NO_DOWN, cf, zeros, zeros, zero, g)
-        if drive and drive_on:
+            row_edge(cur_x, cur_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf, zeros,
+                     zeros, zero, g)
+        if tk.drive and drive_on:
             for j in range(j0, j0 + n):
-                px[r, j] = drive0[r, j] + shift
+                _drive(nxt_x, r, j, drive, shift, prm.inv_cf)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _nodes(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, drive0, drive_on, shift, gy):
+def _nodes(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
-    cf = sp[S_CF]
-    damped = sp[S_DAMPED] != 0
+    cf = prm.cf
+    damped = prm.damped
     zero = like(0, cf)
     for t in range(t0, t1):
-        b, r, j, mask, extra, load, drive, s = (tasks[t, 0], tasks[t, 1], tasks[t, 2], tasks[t, 5], tasks[t, 6],
-                                                tasks[t, 7], tasks[t, 8], tasks[t, 10])
-        if mask == ALL_BONDS and not extra and not load:
-            row_full(cx, cy, px, py, r, j, 1, s, K, b, damped)   # an interior node cut off by a slab edge
+        tk = tasks[t]
+        r, j, s = tk.row, tk.j0, tk.s
+        if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
+            row_full(cur_x, cur_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped)   # interior node cut by a slab edge
         else:
-            fx = ex[j] if extra else zero
-            fy = (ey[j] if extra else zero) + (gy if load else zero)
-            node_masked(cx, cy, px, py, r, j, s, K, b, damped, mask, cf, fx, fy)
-        if drive and drive_on:
-            px[r, j] = drive0[r, j] + shift
+            fx = ex[j] if tk.extra else zero
+            fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
+            node_masked(cur_x, cur_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy)
+        if tk.drive and drive_on:
+            _drive(nxt_x, r, j, drive, shift, prm.inv_cf)
 
 
 @njit(cache=True, _nrt=False)
-def _tasks(phase, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy,
-           plan=None):
-    """The tasks of one phase (0: early, 1: the rest); ``ptr[phase, block]`` = [rows start, nodes start, end].
-    With ``plan`` (the late phase), MPI is given a chance to move the halo messages halfway through."""
-    p = ptr[phase]
-    _rows(p[0, 0], p[0, 1], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, iface.zeros, drive0,
-          False, shift, gy)
-    if plan is not None:
-        exchange(PROGRESS, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, iface.counters)
-    _nodes(p[0, 1], p[0, 2], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, drive0, False, shift, gy)
-    _rows(p[1, 0], p[1, 1], tasks, ctx, cty, ntx, nty, K, sp, iface.ext_x, iface.ext_y, iface.zeros, drive0,
-          drive_on, shift, gy)
-    _nodes(p[1, 1], p[1, 2], tasks, ctx, cty, ntx, nty, K, sp, iface.ext_x, iface.ext_y, drive0, drive_on, shift,
-           gy)
+def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy):
+    """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
+    move the halo messages halfway through (``exchange(PROGRESS)``, a no-op on one rank)."""
+    tasks = sched.tasks
+    pb = sched.ptr[phase, 0]            # the substrate (BOTTOM) block
+    pt = sched.ptr[phase, 1]            # the sliding (TOP) block
+    _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, iface.zeros,
+          drive, False, shift, gy)
+    if phase == LATE:
+        exchange(PROGRESS, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, iface.counters)
+    _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, drive,
+           False, shift, gy)
+    _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y, iface.zeros,
+          drive, drive_on, shift, gy)
+    _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y, drive,
+           drive_on, shift, gy)
 
 
 @njit(cache=True, _nrt=False)
@@ -148,26 +194,27 @@ def _row_moves(cx, cy, px, py, r, j0, n):
 
 
 @njit(cache=True, _nrt=False)
-def _check(n, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, ip, jump, iface, flags):
-    """Owned nodes of u(n+1): finite, and moved less than ``jump`` a in the step (else: runaway);
+def _check(n, tasks, cur, nxt, prm, iface, flags):
+    """Owned nodes of u(n+1): finite, and moved less than ``prm.jump`` a in the step (else: runaway);
     the substrate's owned interface sites within ``drift`` of their columns.
 
     A row whose summed squared moves stays below jump^2 cannot hold a runaway node;
     only other rows are searched node by node.
     """
     g = iface.geom
-    base_b, base_t = g[ik.G_BBASE], g[ik.G_TBASE]
+    jump = prm.jump
     j2 = jump * jump
     for t in range(tasks.shape[0]):
-        b, r, j0, nn = tasks[t, 0], tasks[t, 1], tasks[t, 2], tasks[t, 3]
+        tk = tasks[t]
+        b, r, j0, nn = tk.block, tk.row, tk.j0, tk.n
         if b == 0:
-            if _row_moves(cbx, cby, nbx, nby, r, j0, nn) <= j2:
+            if _row_moves(cur.bx, cur.by, nxt.bx, nxt.by, r, j0, nn) <= j2:
                 continue
-            cx, cy, px, py, base = cbx, cby, nbx, nby, base_b
+            cx, cy, px, py, base = cur.bx, cur.by, nxt.bx, nxt.by, g.bbase
         else:
-            if _row_moves(ctx, cty, ntx, nty, r, j0, nn) <= j2:
+            if _row_moves(cur.tx, cur.ty, nxt.tx, nxt.ty, r, j0, nn) <= j2:
                 continue
-            cx, cy, px, py, base = ctx, cty, ntx, nty, base_t
+            cx, cy, px, py, base = cur.tx, cur.ty, nxt.tx, nxt.ty, g.tbase
         for j in range(j0, j0 + nn):
             if not (np.isfinite(px[r, j]) and np.isfinite(py[r, j])):
                 _flag(flags, FLAG_NONFINITE, n + 1, b, r, j + base, np.inf)
@@ -178,49 +225,49 @@ def _check(n, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, ip, jump, iface, fl
             if d > jump:
                 _flag(flags, FLAG_RUNAWAY, n + 1, b, r, j + base, d)
                 return
-    if ip[I_HAS_IFACE] != 0 and ip[I_RIGID] == 0:
-        drift = iface.consts[ik.P_DRIFT]
-        br = ip[I_BROW]
-        for i in range(g[ik.G_BOWN0], g[ik.G_BOWN1]):
-            if not abs(nbx[br, i]) <= drift:
-                _flag(flags, FLAG_DRIFT, n + 1, 0, br, i + base_b, float(nbx[br, i]))
+    if prm.has_iface and not prm.rigid:
+        drift = iface.consts.drift
+        br = prm.brow
+        for i in range(g.bown0, g.bown1):
+            if not abs(nxt.bx[br, i]) <= drift:
+                _flag(flags, FLAG_DRIFT, n + 1, 0, br, i + g.bbase, float(nxt.bx[br, i]))
                 return
 
 
 @njit(cache=True, _nrt=False)
-def _step(n, cbx, cby, ctx, cty, nbx, nby, ntx, nty, plan, tasks, ptr, K, ip, fp, sp, iface, drive0,
-          flags, tm):
-    n_ds = ip[I_NDS]
-    drive_on = ip[I_DRIVE] != 0 and n >= n_ds
-    if ip[I_DRIVE] != 0 and n == n_ds:
-        for r in range(drive0.shape[0]):
-            for j in range(drive0.shape[1]):
-                drive0[r, j] = ctx[r, j]
-    nr = ip[I_NRAMP]
+def _step(n, cur, nxt, plan, sched, K, prm, iface, drive, diag):
+    """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1)."""
+    n_ds = prm.n_drive_start
+    drive_on = prm.drive and n >= n_ds
+    if prm.drive and n == n_ds:
+        d0 = drive.drive0
+        for r in range(d0.shape[0]):
+            for j in range(d0.shape[1]):
+                d0[r, j] = cur.tx[r, j]
+    nr = prm.n_ramp
     lf = 1.0 if nr == 0 else min(1.0, n / nr)
-    gy = like(lf * fp[F_FEXT], sp[S_CF])
-    shift = like(fp[F_V0] * ((n + 1 - n_ds) * fp[F_DT]), sp[S_CF])
+    gy = like(lf * prm.fext, prm.cf)
+    shift = like(prm.v0 * ((n + 1 - n_ds) * prm.dt), prm.cf)
+    flags, tm = diag.flags, diag.timers
     clk = tm[T_CLOCK:T_CLOCK + 2]
     timed = n % TIME_EVERY == 0           # sample the phase times: a clock read costs about 25 ns
     t0 = now_ns(clk) if timed else 0
-    if ip[I_HAS_IFACE] != 0:
-        br = ip[I_BROW]
-        ik.update(ctx[PAD], cty[PAD], cbx[br], cby[br], iface.partner, iface.x0, iface.taken, iface.claim,
-                  iface.geom, iface.consts, iface.counters, iface.reach, iface.ext_x, iface.ext_y, iface.exb_x,
-                  iface.exb_y)
+    if prm.has_iface:
+        br = prm.brow
+        ik.update(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], iface)
         if iface.reach[0] >= 0:
             _flag(flags, FLAG_REACH, n, 1, 0, iface.reach[0], 0.0)
             iface.reach[0] = -1
-        if not ik.coverage(ctx[PAD], cbx[br], iface.geom):
+        if not ik.coverage(cur.tx[PAD], cur.bx[br], iface.geom):
             _flag(flags, FLAG_REACH, n, 1, 0, -1, 0.0)
     t1 = now_ns(clk) if timed else 0
-    _tasks(0, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy)
+    _tasks(EARLY, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
     t2 = now_ns(clk) if timed else 0
-    err = exchange(POST, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, flags)
+    err = exchange(POST, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, flags)
     t3 = now_ns(clk) if timed else 0
-    _tasks(1, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, iface, drive0, drive_on, shift, gy, plan)
+    _tasks(LATE, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
     t4 = now_ns(clk) if timed else 0
-    err |= exchange(COMPLETE, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, flags)
+    err |= exchange(COMPLETE, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, flags)
     if timed:
         t5 = now_ns(clk)
         tm[T_IFACE] += t1 - t0
@@ -234,70 +281,77 @@ def _step(n, cbx, cby, ctx, cty, nbx, nby, ntx, nty, plan, tasks, ptr, K, ip, fp
 
 
 @njit(cache=True, _nrt=False)
-def _record(n, lv, ip, iface, frames, tm):
+def _record(n, cur, prm, iface, drive, frames, tm):
     """Record frame k at step n if due; False when the buffer is full (the caller must flush first)."""
-    k = n - ip[I_NDS]
-    fe = ip[I_FRAME_EVERY]
-    if k < 0 or k % fe != 0 or k // fe >= ip[I_NFRAMES]:
+    k = n - prm.n_drive_start
+    fe = prm.frame_every
+    if k < 0 or k % fe != 0 or k // fe >= prm.n_frames:
         return True
     t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
-    k = k // fe + ip[I_FOFF]               # the frame's index in the file (a restart may change the cadence)
-    cur = frames.cursor
-    if k <= cur[C_LAST]:
+    k = k // fe + prm.frame_offset         # the frame's index in the file
+    cursor = frames.cursor
+    if k <= cursor[C_LAST]:
         return True
-    slot = k - cur[C_BASE]
+    slot = k - cursor[C_BASE]
     if slot >= frames.step.shape[0]:
         return False
-    if n % 2 == 0:
-        tx, ty, bx, by = lv.tx0, lv.ty0, lv.bx0, lv.by0
-    else:
-        tx, ty, bx, by = lv.tx1, lv.ty1, lv.bx1, lv.by1
-    if ip[I_HAS_IFACE] != 0:
-        br = ip[I_BROW]
-        ik.record(tx[PAD], ty[PAD], bx[br], by[br], iface.partner, iface.x0, iface.geom, iface.consts, slot,
-                  frames.intact, frames.partner, frames.ux, frames.uy, frames.sxy, frames.syy)
+    if prm.has_iface:
+        ik.record(cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
+    # The drive's force in the step that ended here (0 before the drive's first step).
+    on = prm.drive and n > prm.n_drive_start
+    for i in range(drive.force.shape[0]):
+        frames.fdrive[slot, i] = drive.force[i] if on else 0.0
     frames.step[slot] = n
-    cur[C_COUNT] = slot + 1
-    cur[C_LAST] = k
+    cursor[C_COUNT] = slot + 1
+    cursor[C_LAST] = k
     tm[T_FRAMES] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
     return True
 
 
-@njit(cache=True)
-def advance(n0, n1, lv, plan, tasks, ptr, K, ip, fp, sp, iface, drive0, frames, flags, gflags, tm):
+@njit(cache=True, _nrt=False, inline="always")
+def _level(lv, n):
+    """The Level holding u(n)."""
+    if n % 2 == 0:
+        return Level(lv.bx0, lv.by0, lv.tx0, lv.ty0)
+    return Level(lv.bx1, lv.by1, lv.tx1, lv.ty1)
+
+
+@njit(cache=True, nogil=True)
+def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
     """Advance the state from step n0 towards n1; returns (n, why) with why DONE, FRAMES_FULL or STOPPED.
 
-    ``flags`` are this rank's problems (first one kept, with its step and place);
-    ``gflags`` their MAX over all ranks, refreshed every ``check_every`` steps;
-    ``tm`` accumulates the time of each phase (ns, ``T_*``).
+    ``diag.flags`` are this rank's problems (first one kept, with its step and place); ``diag.gflags``
+    their MAX over all ranks, refreshed every ``prm.check_every`` steps; ``diag.timers`` accumulates the
+    time of each phase (ns, ``T_*``); ``diag.beat[BEAT_STEP]`` follows the step.  Runs without the GIL,
+    so the monitor thread can speak while a long call runs.
     """
     n = n0
-    check = ip[I_CHECK]
-    jump = fp[F_JUMP]
+    check = prm.check_every
+    beat = diag.beat
+    beat[BEAT_STEP] = n
+    beat[BEAT_IN_LOOP] = 1
+    tm = diag.timers
     while True:
-        ok = _record(n, lv, ip, iface, frames, tm)
+        cur = _level(lv, n)
+        ok = _record(n, cur, prm, iface, drive, frames, tm)
         if not ok:
+            beat[BEAT_IN_LOOP] = 0
             return n, FRAMES_FULL
         if n >= n1:
+            beat[BEAT_IN_LOOP] = 0
             return n, DONE
-        if n % 2 == 0:
-            _step(n, lv.bx0, lv.by0, lv.tx0, lv.ty0, lv.bx1, lv.by1, lv.tx1, lv.ty1, plan, tasks, ptr, K,
-                  ip, fp, sp, iface, drive0, flags, tm)
-        else:
-            _step(n, lv.bx1, lv.by1, lv.tx1, lv.ty1, lv.bx0, lv.by0, lv.tx0, lv.ty0, plan, tasks, ptr, K,
-                  ip, fp, sp, iface, drive0, flags, tm)
+        nxt = _level(lv, n + 1)
+        _step(n, cur, nxt, plan, sched, K, prm, iface, drive, diag)
         if (n + 1) % check == 0:
             t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
-            if n % 2 == 0:
-                _check(n, tasks, lv.bx0, lv.by0, lv.tx0, lv.ty0, lv.bx1, lv.by1, lv.tx1, lv.ty1, ip, jump, iface,
-                       flags)
-            else:
-                _check(n, tasks, lv.bx1, lv.by1, lv.tx1, lv.ty1, lv.bx0, lv.by0, lv.tx0, lv.ty0, ip, jump, iface,
-                       flags)
-            for i in range(gflags.shape[0]):
-                gflags[i] = flags[i]
-            exchange(REDUCE, plan, lv.bx0, lv.by0, lv.tx0, lv.ty0, iface.partner, iface.x0, gflags)
+            _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)
+            g = diag.gflags
+            for i in range(g.shape[0]):
+                g[i] = diag.flags[i]
+            exchange(REDUCE, plan, lv.bx0, lv.by0, lv.tx0, lv.ty0, iface.partner, iface.x0, g)
             tm[T_CHECK] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
-            if gflags[L_BITS] != 0:
+            beat[BEAT_STEP] = n + 1
+            if g[L_BITS] != 0:
+                beat[BEAT_IN_LOOP] = 0
                 return n + 1, STOPPED
         n += 1

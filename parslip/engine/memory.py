@@ -42,7 +42,7 @@ WRITER_BYTES = 250
 SETUP_BYTES = 100
 OMEGA_BYTES = 1200
 FRAME_BUFFER_BYTES = 8 << 20     # interface frames held in memory between writes, per rank
-FRAME_SITE_BYTES = 37            # per site and frame: intact 1 + partner 4 + ux, uy, sxy, syy 8 each
+FRAME_SITE_BYTES = 45            # per site and frame: intact 1 + partner 4 + ux, uy, sxy, syy, fx 8 each
 
 
 def frame_buffer(nsites: int, n_frames: int) -> int:
@@ -55,7 +55,7 @@ def frame_buffer(nsites: int, n_frames: int) -> int:
 def predict(setup, ranks: int, gather: bool = True) -> dict:
     """Predicted peak resident bytes of each rank of a run of ``setup`` on ``ranks`` ranks."""
     from ..model.stability import LANCZOS_MAX_DOFS
-    from ..parallel.layout import build_layout
+    from ..parallel.layout import build_layout, owned_site_counts
     lat = setup.lattice
     item = np.dtype(setup.dtype).itemsize
     snapshots = setup.n_snapshots > 0
@@ -68,7 +68,8 @@ def predict(setup, ranks: int, gather: bool = True) -> dict:
         c0, c1 = lay.col_range
         owned = int(lat.col_start[c1] - lat.col_start[c0])
         sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
-        frames = frame_buffer(sites, setup.n_frames) * (sites * FRAME_SITE_BYTES + 8)
+        widest = int(owned_site_counts(lat, lay.bounds).max())      # every rank's buffer holds as many frames
+        frames = frame_buffer(widest, setup.n_frames) * (sites * FRAME_SITE_BYTES + 8)
         persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames
         transient = owned * SNAPSHOT_BYTES if snapshots else 0
         if rank == 0 and snapshots and (gather or ranks == 1):     # serial h5py writes every node here

@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import NonFiniteError, SlipReachError
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
-from ..parallel.layout import PAD, build_layout, task_ranges
+from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # RUNAWAY_JUMP (a): a node that moves this far in one step is running away.  It lives with the scene
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
@@ -34,7 +34,7 @@ CHECK_EVERY = 256
 class Simulation:
     """One rank's share of the lattice and the loop that advances it."""
 
-    def __init__(self, setup, comm=None, dtype=None):
+    def __init__(self, setup, comm=None, dtype=None, buffer_frames: int = 0):
         self.setup = st = setup
         self.comm = comm if comm is not None and comm.Get_size() > 1 else None
         rank, size = (comm.Get_rank(), comm.Get_size()) if self.comm else (0, 1)
@@ -44,28 +44,33 @@ class Simulation:
         self.dtype = np.dtype(dtype or st.dtype)
         self.state = State(st, self.layout, self.dtype)
         self.plan = build_plan(self.layout, self.dtype, self.comm)
-        self.tasks = self.layout.tasks
-        self.ptr = task_ranges(self.tasks)
+        self.sched = L.Schedule(tasks=self.layout.tasks, ptr=task_ranges(self.layout.tasks))
         zeta = sc["time.zeta"]
-        c = 0.5 * zeta * st.dt
+        cf = st.dt * st.dt / (1.0 + 0.5 * zeta * st.dt)
         lat = st.lattice
-        self.ip = np.zeros(L.I_SIZE, np.int64)
-        self.ip[:] = [st.n_ramp, st.n_drive_start, int(sc["drive.mode"] != "none"), st.frame_every, st.n_frames,
-                      CHECK_EVERY, int(lat.has_interface), int(lat.rigid),
-                      self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1), 0]
-        fext = -sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0
-        self.fp = np.array([st.dt, st.v0, fext, RUNAWAY_JUMP], np.float64)
-        self.sp = np.array([st.dt * st.dt / (1.0 + c), float(zeta > 0)], self.dtype)
-        self.flags = np.zeros(L.L_SIZE, np.int64)
-        self.gflags = np.zeros(L.L_SIZE, np.int64)
-        self.timers = np.zeros(L.T_SIZE, np.int64)
+        self.params = L.Params(
+            n_ramp=st.n_ramp, n_drive_start=st.n_drive_start, drive=sc["drive.mode"] != "none",
+            frame_every=st.frame_every, n_frames=st.n_frames, frame_offset=0, check_every=CHECK_EVERY,
+            has_iface=bool(lat.has_interface), rigid=bool(lat.rigid),
+            brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),
+            fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
+            cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=bool(zeta > 0))
+        self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
+                           timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
+        # The frame buffer holds the same number of frames on every rank: sized from the largest slab's
+        # site count, which every rank computes from the slab bounds (see the collective rule in ``loop``).
         nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
-        cap = frame_buffer(nsites, st.n_frames)
+        widest = int(owned_site_counts(lat, self.layout.bounds).max())
+        cap = buffer_frames if buffer_frames > 0 else frame_buffer(widest, st.n_frames)
+        self.buffer_frames = cap = int(min(cap, st.n_frames))
+        ndrive = len(self.state.drive.force)
         self.frames = L.Frames(intact=np.zeros((cap, nsites), np.uint8), partner=np.zeros((cap, nsites), np.int32),
                                ux=np.zeros((cap, nsites)), uy=np.zeros((cap, nsites)), sxy=np.zeros((cap, nsites)),
-                               syy=np.zeros((cap, nsites)), step=np.zeros(cap, np.int64),
+                               syy=np.zeros((cap, nsites)), fx=np.zeros((cap, nsites)),
+                               fdrive=np.zeros((cap, ndrive)), step=np.zeros(cap, np.int64),
                                cursor=np.array([0, 0, -1], np.int64))
-        self.chunk = int(np.clip(CHUNK_UPDATES / max(self.state.n_owned, 1), 64, 200_000))
+        # Steps per compiled call before any agreement: from the lattice and rank count, the same everywhere.
+        self.chunk = int(np.clip(CHUNK_UPDATES * size / max(lat.n_nodes, 1), 64, 200_000))
         self.n = 0
         self.drive_clock = None          # (time.monotonic(), time.process_time()) at the drive's first step
         self._snap = {st.n_drive_start + k: j for j, k in enumerate(st.snapshot_steps)}
@@ -82,8 +87,8 @@ class Simulation:
     def advance(self, n_end: int):
         """Run the compiled loop to step ``n_end`` or until it must stop; returns why it returned."""
         s = self.state
-        n, why = L.advance(self.n, n_end, s.levels, self.plan, self.tasks, self.ptr, s.K, self.ip, self.fp,
-                           self.sp, s.iface, s.drive0, self.frames, self.flags, self.gflags, self.timers)
+        n, why = L.advance(self.n, n_end, s.levels, self.plan, self.sched, s.K, self.params, s.iface, s.drive,
+                           self.frames, self.diag)
         self.n = int(n)
         return why
 
@@ -160,7 +165,7 @@ class Simulation:
     @property
     def frames_total(self) -> int:
         """Interface frames in the output file once this run ends (earlier runs' frames included)."""
-        return int(self.ip[L.I_FOFF]) + self.setup.n_frames
+        return int(self.params.frame_offset) + self.setup.n_frames
 
     @property
     def frames_written(self) -> int:
@@ -189,7 +194,7 @@ class Simulation:
         lat = self.setup.lattice
         d0 = np.zeros(s.n_owned, s.dtype)
         top = s.own_block == TOP
-        d0[top] = s.drive0[s.own_prow[top], s.own_j[top]]
+        d0[top] = s.drive.drive0[s.own_prow[top], s.own_j[top]]
         parts = {"gid": s.gid, "u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
                  "drive0": d0}
         if lat.has_interface:
@@ -204,21 +209,23 @@ class Simulation:
         """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
 
         Every rank takes its OWNED part by global id, then one halo exchange fills the HALO copies."""
-        from ..parallel.exchange import COMPLETE, POST, exchange
         s, st = self.state, self.setup
         self.n = n = int(attrs["step"])
         for level, name in ((n, "u"), (n - 1, "u_prev")):
             s.set_owned_u(level, arrays[name][s.gid])
         top = s.own_block == TOP
-        s.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
+        s.drive.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
         if st.lattice.has_interface:
             sl = s.owned_sites()
             sites = np.arange(sl.stop - sl.start) + s.site0()
             s.iface.partner[sl] = arrays["partner"][sites]
             s.iface.x0[sl] = arrays["x0"][sites]
-        bx, by, tx, ty = s.level(n)
-        for phase in (POST, COMPLETE):
-            exchange(phase, self.plan, bx, by, tx, ty, s.iface.partner, s.iface.x0, self.flags)
+        if self.comm is not None:
+            from ..parallel.halo_mpi import mpi_exchange
+            from ..parallel.exchange import COMPLETE, POST
+            bx, by, tx, ty = s.level(n)
+            for phase in (POST, COMPLETE):
+                mpi_exchange(phase, self.plan, bx, by, tx, ty, s.iface.partner, s.iface.x0, self.diag.flags)
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
         # The output carries on after what the checkpointed run wrote, at this scene's cadence.
@@ -226,7 +233,7 @@ class Simulation:
         self.last_frame_step = last = int(attrs["last_frame_step"])
         fe, nds = st.frame_every, st.n_drive_start
         k_first = 0 if last < nds else (last - nds) // fe + 1
-        self.ip[L.I_FOFF] = written - k_first
+        self.params = self.params._replace(frame_offset=written - k_first)
         self.frames.cursor[:] = [written, 0, written - 1]
         snaps = int(attrs["snapshots_written"])
         later = sorted(k for k in self._snap if k > n)
@@ -265,7 +272,7 @@ class Simulation:
     def _fail(self, writer):
         """Every rank stopped at the same step: find the first problem on any rank and raise it."""
         st = self.setup
-        mine = self.flags.copy()
+        mine = self.diag.flags.copy()
         reports = [r for r in self._gather(mine) if r[L.L_BITS]]
         first = min(reports, key=lambda r: r[L.L_STEP])
         bits, step = int(first[L.L_BITS]), int(first[L.L_STEP])

@@ -12,21 +12,24 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.lattice import BOTTOM, DIRECTIONS, TOP
+from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
 from .kernels import interface as ik
-from .loop import Iface, Levels
+from .loop import Drive, Levels
 
 
 def stiffness_constants(kn: float, kt: float, dt: float, zeta: float) -> np.ndarray:
     """[C k_n, C k_t, C A, C B', C C', B] of ``kernels.stencil``: A = (k_n-k_t)/4 + k_t, B' = sqrt(3)(k_n-k_t)/4,
     C' = 3(k_n-k_t)/4 + k_t, C = dt^2/(1 + zeta dt/2), B = (1 - zeta dt/2)/(1 + zeta dt/2)."""
+    from .kernels.stencil import K_A, K_B, K_C, K_DAMP, K_N, K_SIZE, K_T
     d = kn - kt
     c = 0.5 * zeta * dt
     cf = dt * dt / (1.0 + c)
-    return np.array([cf * kn, cf * kt, cf * (d / 4 + kt), cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt),
-                     (1.0 - c) / (1.0 + c)])
+    k = np.zeros(K_SIZE)
+    k[K_N], k[K_T], k[K_A] = cf * kn, cf * kt, cf * (d / 4 + kt)
+    k[K_B], k[K_C], k[K_DAMP] = cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt), (1.0 - c) / (1.0 + c)
+    return k
 
 
 def _arena(shapes, dtype) -> list[np.ndarray]:
@@ -65,32 +68,49 @@ class State:
         zeta = sc["time.zeta"]
         self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom, setup.dt, zeta),
                            stiffness_constants(mat.kn_top, mat.kt_top, setup.dt, zeta)], dt)
-        self.drive0 = np.zeros(tl.shape, dt)
 
         # Interface ------------------------------------------------------------
         wt, wb = tl.width, bl.width
         partner = np.full(wt, -1, np.int64)
         reach = layout.reach
-        geom = np.zeros(ik.G_SIZE, np.int64)
-        consts = np.zeros(ik.P_SIZE, dt)
         if lat.has_interface:
             lo, hi = tl.j(tl.stored[0])
             partner[lo:hi] = np.arange(lo, hi) + tl.base          # each top site faces the bottom site of its column
             br = bl.rows - 1
-            geom[:] = [tl.base, lo, hi, *tl.j(tl.owned[0]), bl.base, *bl.j(bl.stored[br]),
-                       *bl.j(bl.owned[br]), bl.prow(br), reach.window, tl.span[0], tl.span[1] - 1, lat.bottom.cols,
-                       int(lat.rigid), reach.top_cover, reach.bottom_cover]
+            blo, bhi = bl.j(bl.stored[br])
+            bown0, bown1 = bl.j(bl.owned[br])
             if lat.rigid:                     # a rigid substrate feels no reaction: no owned substrate sites
-                geom[ik.G_BOWN0] = geom[ik.G_BOWN1] = geom[ik.G_BLO]
-            consts[:] = [sc["interface.delta0"], sc["interface.delta_b"], sc["interface.kx"], sc["interface.ky"],
-                         float(sc["interface.reform_x0"] == "zero"), reach.drift, 1.0 / setup.l,
-                         1.0 / (DENSITY * mat.c_r ** 2)]
-        self.iface = Iface(partner=partner, x0=np.zeros(wt, dt), claim=np.zeros(wt, np.int64),
-                           taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
-                           exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
-                           zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,
-                           counters=np.zeros(2, np.int64), reach=np.full(1, -1, np.int64))
+                bown0 = bown1 = blo
+            town0, town1 = tl.j(tl.owned[0])
+            geom = ik.Geometry(tbase=tl.base, tlo=lo, thi=hi, town0=town0, town1=town1, bbase=bl.base, blo=blo,
+                               bhi=bhi, bown0=bown0, bown1=bown1, brow=bl.prow(br), window=reach.window,
+                               tfirst=tl.span[0], tlast=tl.span[1] - 1, bcols=lat.bottom.cols, rigid=int(lat.rigid),
+                               tcover=reach.top_cover, bcover=reach.bottom_cover)
+            consts = ik.Constants(delta0=dt.type(sc["interface.delta0"]), delta_b=dt.type(sc["interface.delta_b"]),
+                                  kx=dt.type(sc["interface.kx"]), ky=dt.type(sc["interface.ky"]),
+                                  reform_zero=sc["interface.reform_x0"] == "zero", drift=dt.type(reach.drift),
+                                  inv_l=dt.type(1.0 / setup.l), traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)))
+        else:
+            geom = ik.Geometry(*([0] * len(ik.Geometry._fields)))
+            consts = ik.Constants(*([dt.type(0)] * 4), False, *([dt.type(0)] * 3))
+        geom = ik.Geometry(*(int(v) for v in geom))
+        self.iface = ik.Iface(partner=partner, x0=np.zeros(wt, dt), claim=np.zeros(wt, np.int64),
+                              taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
+                              exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
+                              zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,
+                              counters=np.zeros(2, np.int64), reach=np.full(1, -1, np.int64))
+
         self._index_owned()
+
+        # Drive -----------------------------------------------------------------
+        # The OWNED driven nodes of the top block, in global id order, each with its slot in the drive's
+        # force array (``loop.Drive``).
+        d = np.flatnonzero(lat.kinds(self.nodes(), sc["drive.mode"]) == DRIVEN) if sc["drive.mode"] != "none" \
+            else np.zeros(0, np.int64)
+        self.driven_gid = self.gid[d]
+        index = np.full(tl.shape, -1, np.int64)
+        index[self.own_prow[d], self.own_j[d]] = np.arange(len(d))
+        self.drive = Drive(drive0=np.zeros(tl.shape, dt), index=index, force=np.zeros(len(d), dt))
 
     # ------------------------------------------------------------ numbering --
     def _index_owned(self):
@@ -148,7 +168,7 @@ class State:
     def owned_sites(self) -> slice:
         """Local columns of the OWNED top interface sites."""
         g = self.iface.geom
-        return slice(int(g[ik.G_TOWN0]), int(g[ik.G_TOWN1]))
+        return slice(g.town0, g.town1)
 
     def site0(self) -> int:
         """Global index (0 = the block's first column) of the first OWNED interface site."""
@@ -185,9 +205,9 @@ class State:
             p = self.iface.partner[s]
             bonded = p >= 0
             j = np.arange(s.start, s.stop)[bonded]
-            i = p[bonded] - g[ik.G_BBASE]
-            br = int(g[ik.G_BROW])
-            dx = (j + g[ik.G_TBASE] - p[bonded]) + (tx[PAD, j].astype(float) - bx[br, i])
+            i = p[bonded] - g.bbase
+            br = g.brow
+            dx = (j + g.tbase - p[bonded]) + (tx[PAD, j].astype(float) - bx[br, i])
             dy = sc["interface.delta0"] + (ty[PAD, j].astype(float) - by[br, i])
             total += float(np.sum(0.5 * sc["interface.kx"] * (dx - self.iface.x0[j]) ** 2 +
                                   0.5 * sc["interface.ky"] * (dy - sc["interface.delta0"]) ** 2))

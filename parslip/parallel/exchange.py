@@ -1,164 +1,65 @@
-"""How halo copies are refreshed: the exchange plan, and the exchange the loop calls.
+"""How halo copies are refreshed: the exchange the compiled loop calls, and its plan.
 
 The compiled time loop calls ``exchange(phase, plan, ...)`` and never MPI
-directly; the plan it is passed says who the peers are.  For every peer,
-phase POST packs the OWNED values it keeps as HALO and posts MPI_Irecv and
-MPI_Isend; COMPLETE waits (MPI_Waitall) and unpacks into the HALO copies;
-REDUCE takes the MAX of the loop's flags over all ranks (MPI_Allreduce).
-One rank's plan has no peers and no communicator: the exchange is a no-op
-and no MPI function is ever called.
+directly; the plan it is passed says who the peers are, and its *type*
+chooses the code numba compiles:
+
+- ``NullPlan`` (one rank): every phase is a no-op.  The loop compiled for it
+  references no MPI symbol, so a one-rank run never loads an MPI library.
+- ``halo_mpi.Plan`` (several ranks): phase POST packs the OWNED values each
+  peer keeps as HALO and posts MPI_Irecv and MPI_Isend; COMPLETE waits
+  (MPI_Waitall) and unpacks into the HALO copies; PROGRESS lets MPI move the
+  messages while the loop computes (MPI_Testall); REDUCE takes the MAX of the
+  loop's flags over all ranks (MPI_Allreduce).  ``parallel.halo_mpi`` holds
+  it and is imported only when a communicator with more than one rank is used.
 
 What travels is given by ``parallel.layout``: row segments of positions, and
-the bond state (partner, x0) of the block's interface sites.  One message
-per peer per step carries all of it.  Integers (partners) travel as floats:
-exact below 2^24 even in float32.
+the bond state (partner, x0) of the block's interface sites.
 """
 from __future__ import annotations
 
 from collections import namedtuple
 
-import numpy as np
-from numba import njit
+from numba import types
+from numba.extending import overload
 
-from . import mpi
-
+# Phases of one exchange.
 POST, COMPLETE, REDUCE, PROGRESS = 0, 1, 2, 3
-TAG = 7
 
-Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "
-                          "req status handles rflags")
-
-
-def build_plan(layout, dtype, comm=None) -> Plan:
-    """Index arrays and buffers of ``layout``'s exchange, in local columns; MPI handles from ``comm``."""
-    from ..model.lattice import TOP
-    blocks = layout.blocks
-    peers = layout.peers
-
-    def segs(lists, with_block):
-        rows, ptr = [], [0]
-        for lst in lists:
-            for sg in lst:
-                if with_block:
-                    b = blocks[sg.block]
-                    rows.append((sg.block, b.prow(sg.row), b.j(sg.lo), sg.hi - sg.lo))
-                else:
-                    rows.append((blocks[TOP].j(sg[0]), sg[1] - sg[0]))
-            ptr.append(len(rows))
-        w = 4 if with_block else 2
-        return np.array(rows, np.int64).reshape(-1, w), np.array(ptr, np.int64)
-
-    ss, ss_ptr = segs([p.send for p in peers], True)
-    rs, rs_ptr = segs([p.recv for p in peers], True)
-    sts, sts_ptr = segs([p.send_sites for p in peers], False)
-    rts, rts_ptr = segs([p.recv_sites for p in peers], False)
-
-    def sizes(seg, ptr, sseg, sptr):
-        out = [0]
-        for i in range(len(peers)):
-            n = 2 * int(seg[ptr[i]:ptr[i + 1], 3].sum()) + 2 * int(sseg[sptr[i]:sptr[i + 1], 1].sum())
-            out.append(out[-1] + n)
-        return np.array(out, np.int64)
-
-    sb_ptr = sizes(ss, ss_ptr, sts, sts_ptr)
-    rb_ptr = sizes(rs, rs_ptr, rts, rts_ptr)
-    if comm is not None:
-        h = mpi.handles(comm, dtype)
-    else:
-        h = np.zeros(4, mpi.HANDLE_DTYPE)      # no communicator: a one-rank run
-    req = np.zeros(2 * len(peers), mpi.REQUEST_DTYPE)
-    status = np.zeros(max(1, 2 * len(peers)) * mpi.STATUS_BYTES, np.uint8)
-    return Plan(peer=np.array([p.rank for p in peers], np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,
-                rs=rs, rs_ptr=rs_ptr, rts=rts, rts_ptr=rts_ptr, sbuf=np.zeros(sb_ptr[-1], dtype), sb_ptr=sb_ptr,
-                rbuf=np.zeros(rb_ptr[-1], dtype), rb_ptr=rb_ptr, req=req, status=status, handles=h,
-                rflags=np.zeros(8, np.int64))
+# One rank: nothing to exchange.  (numba needs a field; ``ranks`` is always 1.)
+NullPlan = namedtuple("NullPlan", "ranks")
 
 
-@njit(cache=True, _nrt=False, inline="always")
-def _move(buf, k, a, r, j0, n, out):
-    """n values of row r of ``a`` from column j0 into ``buf`` at k (``out``), or back; returns k + n."""
-    if out:
-        for j in range(n):
-            buf[k + j] = a[r, j0 + j]
-    else:
-        for j in range(n):
-            a[r, j0 + j] = buf[k + j]
-    return k + n
+def build_plan(layout, dtype, comm=None):
+    """The exchange plan of ``layout``: a ``NullPlan`` without a communicator of more than one rank,
+    else the MPI plan (this loads the MPI library mpi4py uses)."""
+    if comm is None or comm.Get_size() == 1:
+        return NullPlan(1)
+    from . import halo_mpi
+    return halo_mpi.build_plan(layout, dtype, comm)
 
 
-@njit(cache=True, _nrt=False)
-def _transfer(plan, i, bx, by, tx, ty, partner, x0, out):
-    """Peer i's message: pack my OWNED values into the send buffer (``out``), or unpack its values
-    into my HALO copies: every row segment's x then y, then the interface sites' partner then x0."""
-    if out:
-        buf, k, segs, lo, hi = plan.sbuf, plan.sb_ptr[i], plan.ss, plan.ss_ptr[i], plan.ss_ptr[i + 1]
-        sites, slo, shi = plan.sts, plan.sts_ptr[i], plan.sts_ptr[i + 1]
-    else:
-        buf, k, segs, lo, hi = plan.rbuf, plan.rb_ptr[i], plan.rs, plan.rs_ptr[i], plan.rs_ptr[i + 1]
-        sites, slo, shi = plan.rts, plan.rts_ptr[i], plan.rts_ptr[i + 1]
-    for g in range(lo, hi):
-        b, r, j0, n = segs[g, 0], segs[g, 1], segs[g, 2], segs[g, 3]
-        if b == 0:
-            k = _move(buf, k, bx, r, j0, n, out)
-            k = _move(buf, k, by, r, j0, n, out)
-        else:
-            k = _move(buf, k, tx, r, j0, n, out)
-            k = _move(buf, k, ty, r, j0, n, out)
-    for g in range(slo, shi):
-        j0, n = sites[g, 0], sites[g, 1]
-        if out:
-            for j in range(n):
-                buf[k + j] = partner[j0 + j]
-        else:
-            for j in range(n):
-                partner[j0 + j] = np.int64(buf[k + j])
-        k += n
-        for j in range(n):
-            if out:
-                buf[k + j] = x0[j0 + j]
-            else:
-                x0[j0 + j] = buf[k + j]
-        k += n
-
-
-@njit(cache=True, _nrt=False)
 def exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
-    """One phase of the halo exchange of ``plan`` (see the module docstring); returns the OR of MPI error codes.
+    """One phase of the halo exchange of ``plan``; returns the OR of MPI error codes (0 on one rank).
 
-    POST: MPI_Irecv from every peer, then pack and MPI_Isend to every peer.
-    COMPLETE: MPI_Waitall, then unpack into the HALO copies.
-    REDUCE: ``flags`` becomes its MAX over all ranks.
+    Compiled code only (the implementation is chosen by the plan's type, see the module docstring);
+    from Python, call ``halo_mpi.mpi_exchange`` with an MPI plan.
     """
-    npeer = plan.peer.shape[0]
-    comm, ftype, itype, opmax = plan.handles[0], plan.handles[1], plan.handles[2], plan.handles[3]
-    err = 0
-    if phase == REDUCE:
-        if comm == 0:
+    raise TypeError("exchange() runs in compiled code; from Python call parslip.parallel.halo_mpi.mpi_exchange")
+
+
+def _is_null(plan) -> bool:
+    return isinstance(plan, types.BaseNamedTuple) and plan.instance_class is NullPlan
+
+
+@overload(exchange, inline="always")
+def _exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
+    if _is_null(plan):
+        def nothing(phase, plan, bx, by, tx, ty, partner, x0, flags):
             return 0
-        err |= mpi.allreduce(flags.ctypes.data, plan.rflags.ctypes.data, np.int32(flags.shape[0]), itype, opmax,
-                             comm)
-        for i in range(flags.shape[0]):
-            flags[i] = plan.rflags[i]
-        return err
-    if npeer == 0:
-        return 0
-    rq = plan.req.ctypes.data
-    if phase == PROGRESS:                 # let MPI move the messages while the loop computes
-        return mpi.testall(np.int32(2 * npeer), rq, plan.rflags.ctypes.data, plan.status.ctypes.data)
-    isz = plan.req.itemsize
-    fsz = plan.sbuf.itemsize
-    if phase == POST:
-        for i in range(npeer):
-            n = plan.rb_ptr[i + 1] - plan.rb_ptr[i]
-            err |= mpi.irecv(plan.rbuf.ctypes.data + plan.rb_ptr[i] * fsz, np.int32(n), ftype,
-                             np.int32(plan.peer[i]), np.int32(TAG), comm, rq + i * isz)
-        for i in range(npeer):
-            _transfer(plan, i, bx, by, tx, ty, partner, x0, True)
-            n = plan.sb_ptr[i + 1] - plan.sb_ptr[i]
-            err |= mpi.isend(plan.sbuf.ctypes.data + plan.sb_ptr[i] * fsz, np.int32(n), ftype,
-                             np.int32(plan.peer[i]), np.int32(TAG), comm, rq + (npeer + i) * isz)
-    else:
-        err |= mpi.waitall(np.int32(2 * npeer), rq, plan.status.ctypes.data)
-        for i in range(npeer):
-            _transfer(plan, i, bx, by, tx, ty, partner, x0, False)
-    return err
+        return nothing
+    from .halo_mpi import mpi_exchange       # typing the MPI plan: the MPI library is loaded by now
+
+    def with_mpi(phase, plan, bx, by, tx, ty, partner, x0, flags):
+        return mpi_exchange(phase, plan, bx, by, tx, ty, partner, x0, flags)
+    return with_mpi

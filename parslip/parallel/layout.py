@@ -56,7 +56,8 @@ EXTRA_NONE, EXTRA_TOP, EXTRA_BOTTOM = 0, 1, 2
 # extra force, load (1: the normal load acts), drive (1: x prescribed once the drive runs), early (a peer
 # keeps these nodes), s (up/down neighbours of column c are c - 1 + s and c + s).
 TASK_FIELDS = ("block", "row", "j0", "n", "kind", "mask", "extra", "load", "drive", "early", "s")
-TASK_WIDTH = len(TASK_FIELDS)
+# The schedule is a structured array: the compiled loop reads a task's fields by name (``task.row``).
+TASK_DTYPE = np.dtype([(name, np.int64) for name in TASK_FIELDS])
 # Neighbour slots (bit k of a mask): 0 right, 1 up-right, 2 up-left, 3 left, 4 down-left, 5 down-right.
 ALL_BONDS = 0b111111
 # Row segments up to this many nodes run node by node (a vectorised loop's set-up costs more).
@@ -207,7 +208,7 @@ class Layout:
     reach: Reach | None
     blocks: tuple               # BlockLayout for BOTTOM, TOP (BOTTOM has rows = 0 for a free block)
     peers: list
-    tasks: np.ndarray           # [ntasks, TASK_WIDTH] the row schedule of one step
+    tasks: np.ndarray           # [ntasks] of TASK_DTYPE: the row schedule of one step
 
     @property
     def col_range(self) -> tuple[int, int]:
@@ -333,23 +334,27 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
                 else:
                     rows.append((b, blk.prow(r), blk.j(c_lo), c_hi - c_lo, kind, ALL_BONDS, extra, load,
                                  row_drive, early(c_lo, c_hi), blk.shift(r)))
-    t = np.array(rows, np.int64).reshape(-1, TASK_WIDTH)
+    t = np.array([tuple(r) for r in rows], TASK_DTYPE)
     # Grouped by phase (early first), block, then row tasks before single nodes, each in row order.
-    f = TASK_FIELDS.index
-    order = np.lexsort((t[:, f("j0")], t[:, f("row")], t[:, f("kind")] == MASKED, t[:, f("block")],
-                        1 - t[:, f("early")]))
+    order = np.lexsort((t["j0"], t["row"], t["kind"] == MASKED, t["block"], 1 - t["early"]))
     return t[order]
 
 
+# The phases of a step's schedule (``task_ranges``): tasks a peer needs first, then the rest.
+EARLY, LATE = 0, 1
+# ptr[phase, block] holds [ROWS, NODES, END]: first row task, first single-node task, end.
+ROWS, NODES, END = 0, 1, 2
+
+
 def task_ranges(tasks: np.ndarray) -> np.ndarray:
-    """ptr[phase, block] = [first row task, first single-node task, end] of the sorted schedule."""
-    f = TASK_FIELDS.index
+    """ptr[phase, block, ROWS | NODES | END]: the first row task, the first single-node task and the end
+    of each phase's (EARLY, LATE) tasks of each block in the sorted schedule."""
     ptr = np.zeros((2, 2, 3), np.int64)
     pos = 0
     for phase in (0, 1):
         for b in (BOTTOM, TOP):
-            sel = (tasks[:, f("early")] == 1 - phase) & (tasks[:, f("block")] == b)
-            n_rows = int((sel & (tasks[:, f("kind")] != MASKED)).sum())
+            sel = (tasks["early"] == 1 - phase) & (tasks["block"] == b)
+            n_rows = int((sel & (tasks["kind"] != MASKED)).sum())
             n_all = int(sel.sum())
             ptr[phase, b] = [pos, pos + n_rows, pos + n_all]
             pos += n_all
@@ -394,6 +399,15 @@ def build_layout(lattice: Lattice, rank: int, size: int, reach: Reach | None, mo
             peers.append(peer)
     tasks = _tasks(lattice, mine, peers, mode)
     return Layout(rank=rank, size=size, bounds=bounds, reach=reach, blocks=mine, peers=peers, tasks=tasks)
+
+
+def owned_site_counts(lattice: Lattice, bounds: np.ndarray) -> np.ndarray:
+    """Interface sites of the block each rank owns, from the slab bounds alone (every rank can compute
+    every rank's count: the frame buffer is sized from it, the same on all ranks)."""
+    if not lattice.has_interface:
+        return np.zeros(len(bounds) - 1, np.int64)
+    lo, hi = lattice.top.col0, lattice.top.col0 + lattice.top.cols
+    return np.clip(np.minimum(bounds[1:], hi) - np.maximum(bounds[:-1], lo), 0, None).astype(np.int64)
 
 
 def max_ranks(lattice: Lattice) -> int:

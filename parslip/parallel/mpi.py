@@ -9,7 +9,7 @@ Handles (communicator, datatypes, the MAX operation) are passed in as
 integers at run time, which serves both MPICH (int handles) and Open MPI
 (pointer handles).
 
-Only ``parallel.exchange`` calls these; kernels never see MPI.
+Only ``parallel.halo_mpi`` imports this module (and so loads the MPI library); kernels never see MPI.
 """
 from __future__ import annotations
 
@@ -63,8 +63,13 @@ testall = types.ExternalFunction("MPI_Testall", _int(_int, _ptr, _ptr, _ptr))
 allreduce = types.ExternalFunction("MPI_Allreduce", _int(_ptr, _ptr, _int, HANDLE, HANDLE, HANDLE))
 
 
+# Slots of the handles array.
+H_COMM, H_FLOAT, H_INT64, H_MAX = range(4)
+
+
 def handles(comm, float_dtype) -> np.ndarray:
-    """[comm, float datatype, int64 datatype, MAX op] as the integers compiled code passes to MPI."""
+    """[H_COMM, H_FLOAT, H_INT64, H_MAX]: the communicator, the state's float datatype, MPI_INT64_T and
+    MPI_MAX as the integers compiled code passes to MPI."""
     ftype = MPI.DOUBLE if np.dtype(float_dtype) == np.float64 else MPI.FLOAT
     return np.array([MPI._handleof(comm), MPI._handleof(ftype), MPI._handleof(MPI.INT64_T),
                      MPI._handleof(MPI.MAX)], HANDLE_DTYPE)

@@ -25,6 +25,8 @@ sites, and the halo sites bonded to its own substrate sites, come out exact
 as long as the halo covers the distances the update depends on
 (``layout.Reach``).  ``coverage`` checks that in the current positions.
 """
+from collections import namedtuple
+
 import numpy as np
 from numba import njit
 
@@ -33,13 +35,28 @@ from .floats import like
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
 BREAKS, FORMS = 0, 1
 
-# Indices into the integer geometry ``g`` of the interface (local columns unless said).
-(G_TBASE, G_TLO, G_THI, G_TOWN0, G_TOWN1, G_BBASE, G_BLO, G_BHI, G_BOWN0, G_BOWN1, G_BROW, G_WINDOW,
- G_TFIRST, G_TLAST, G_BCOLS, G_RIGID, G_TCOVER, G_BCOVER) = range(18)
-G_SIZE = 18
-# Indices into the float constants ``p`` (state float type).
-P_DELTA0, P_DELTAB, P_KX, P_KY, P_REFORM_ZERO, P_DRIFT, P_INV_L, P_TRACTION = range(8)
-P_SIZE = 8
+# The integer geometry of the interface on one rank (local array columns unless said):
+#   tbase, bbase     global column of array column 0 of the block's / the substrate's interface row
+#   tlo, thi         the block's interface sites stored here (OWNED and HALO), [tlo, thi)
+#   town0, town1     the block's OWNED interface sites
+#   blo, bhi         the substrate's interface sites stored here; bown0, bown1 the OWNED ones
+#   brow             array row of the substrate's interface row
+#   window           substrate columns searched each side of the nearest one when re-bonding
+#   tfirst, tlast    global columns of the block's first and last interface site
+#   bcols            substrate columns in all; rigid: 1 for a rigid substrate
+#   tcover, bcover   reach (a) the halo must cover beyond this rank's interest (``layout.Reach``)
+Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow window tfirst tlast "
+                                  "bcols rigid tcover bcover")
+# The interface constants, in the state's float type (a bool for the re-bonding rule):
+#   delta0, delta_b (a); kx, ky (m c^2/a^2); reform_zero: a re-formed bond starts with x0 = 0;
+#   drift (a) a substrate site may move from its column; inv_l = 1/l; traction = 1/(a rho c_r^2)
+Constants = namedtuple("Constants", "delta0 delta_b kx ky reform_zero drift inv_l traction")
+# The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
+# the substrate's (bottom sites): partner (global substrate column, -1 broken) and rest offset x0 of each
+# bond; claim and taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom
+# nodes; zeros a row of zeros; counters [BREAKS, FORMS] of OWNED sites; reach[0] the first OWNED site
+# out of the halo's reach (-1 none).
+Iface = namedtuple("Iface", "partner x0 claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach")
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -49,7 +66,7 @@ def _gap(g, q, tx, ty, bx, by, j, i, d0):
 
 
 @njit(cache=True, _nrt=False)
-def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext_x, ext_y, exb_x, exb_y):
+def update(tx, ty, bx, by, it):
     """Steps 1-3 above on every local top site, then the bond forces at u(t).
 
     tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row.  ``partner`` holds global
@@ -60,10 +77,13 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext
     ``reach[0]`` becomes the global column of the first OWNED top site whose bond or re-bonding
     window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
     """
-    tbase, tlo, thi, town0, town1 = g[G_TBASE], g[G_TLO], g[G_THI], g[G_TOWN0], g[G_TOWN1]
-    bbase, blo, bhi, bcols, w = g[G_BBASE], g[G_BLO], g[G_BHI], g[G_BCOLS], g[G_WINDOW]
-    bown0, bown1 = g[G_BOWN0], g[G_BOWN1]
-    d0, db, kx, ky = p[P_DELTA0], p[P_DELTAB], p[P_KX], p[P_KY]
+    g, p = it.geom, it.consts
+    partner, x0, taken, claim, counters, reach = it.partner, it.x0, it.taken, it.claim, it.counters, it.reach
+    ext_x, ext_y, exb_x, exb_y = it.ext_x, it.ext_y, it.exb_x, it.exb_y
+    tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
+    bbase, blo, bhi, bcols, w = g.bbase, g.blo, g.bhi, g.bcols, g.window
+    bown0, bown1 = g.bown0, g.bown1
+    d0, db, kx, ky = p.delta0, p.delta_b, p.kx, p.ky
     db2, d02 = db * db, d0 * d0
     zero = like(0, d0)
     for i in range(blo, bhi):
@@ -120,7 +140,7 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext
                 got = i
         claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j        # site and claim in one integer
     # 3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once.
-    zero_x0 = p[P_REFORM_ZERO] != 0
+    zero_x0 = p.reform_zero
     for m in range(nfree):
         c = claim[m]
         if c < 0:
@@ -161,8 +181,8 @@ def coverage(tx, bx, g):
     the block's interface row must be stored over it plus ``top_cover`` a, and the substrate's over it
     plus ``bottom_cover`` a, except where a row ends.  Top sites stay in x order along the row.
     """
-    tbase, tlo, thi, town0, town1 = g[G_TBASE], g[G_TLO], g[G_THI], g[G_TOWN0], g[G_TOWN1]
-    bbase, blo, bhi, bown0, bown1 = g[G_BBASE], g[G_BLO], g[G_BHI], g[G_BOWN0], g[G_BOWN1]
+    tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
+    bbase, blo, bhi, bown0, bown1 = g.bbase, g.blo, g.bhi, g.bown0, g.bown1
     if thi <= tlo:
         return True
     have = False
@@ -177,37 +197,43 @@ def coverage(tx, bx, g):
         have = True
     if not have:
         return True
-    ct, cb = g[G_TCOVER], g[G_BCOVER]
-    if tlo + tbase > g[G_TFIRST] and tlo + tbase + float(tx[tlo]) > lo - ct:
+    ct, cb = g.tcover, g.bcover
+    if tlo + tbase > g.tfirst and tlo + tbase + float(tx[tlo]) > lo - ct:
         return False
-    if thi - 1 + tbase < g[G_TLAST] and thi - 1 + tbase + float(tx[thi - 1]) < hi + ct:
+    if thi - 1 + tbase < g.tlast and thi - 1 + tbase + float(tx[thi - 1]) < hi + ct:
         return False
     if blo + bbase > 0 and blo + bbase > lo - cb:
         return False
-    if bhi - 1 + bbase < g[G_BCOLS] - 1 and bhi - 1 + bbase < hi + cb:
+    if bhi - 1 + bbase < g.bcols - 1 and bhi - 1 + bbase < hi + cb:
         return False
     return True
 
 
 @njit(cache=True, _nrt=False)
-def record(tx, ty, bx, by, partner, x0, g, p, k, f_intact, f_partner, f_ux, f_uy, f_sxy, f_syy):
-    """Frame k of the interface record for the OWNED top sites: intact, partner, u/l, and the traction
-    sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho c_r^2), syy = k_y (y_ij - delta0)/(a rho c_r^2)."""
-    tbase, town0, town1 = g[G_TBASE], g[G_TOWN0], g[G_TOWN1]
-    bbase, blo, bhi = g[G_BBASE], g[G_BLO], g[G_BHI]
-    d0, kx, ky, inv_l, tr = p[P_DELTA0], p[P_KX], p[P_KY], p[P_INV_L], p[P_TRACTION]
+def record(tx, ty, bx, by, it, k, fr):
+    """Frame k of the interface record for the OWNED top sites into the buffer ``fr`` (``loop.Frames``):
+    intact, partner, u/l, the traction sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho c_r^2),
+    syy = k_y (y_ij - delta0)/(a rho c_r^2), and the bond's x-force on the block f_x = -k_x (x_ij - x0)
+    (m c^2/a; 0 where broken), which the writer sums over the sites into the friction force."""
+    g, p, partner, x0 = it.geom, it.consts, it.partner, it.x0
+    tbase, town0, town1 = g.tbase, g.town0, g.town1
+    bbase, blo, bhi = g.bbase, g.blo, g.bhi
+    d0, kx, ky, inv_l, tr = p.delta0, p.kx, p.ky, p.inv_l, p.traction
     for m in range(town1 - town0):
         j = town0 + m
         q = partner[j]
-        f_partner[k, m] = q
-        f_intact[k, m] = 1 if q >= 0 else 0
-        f_ux[k, m] = tx[j] * inv_l
-        f_uy[k, m] = ty[j] * inv_l
+        fr.partner[k, m] = q
+        fr.intact[k, m] = 1 if q >= 0 else 0
+        fr.ux[k, m] = tx[j] * inv_l
+        fr.uy[k, m] = ty[j] * inv_l
         i = q - bbase
         if q >= 0 and blo <= i < bhi:
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-            f_sxy[k, m] = kx * (dx - x0[j]) * tr
-            f_syy[k, m] = ky * (dy - d0) * tr
+            sx = kx * (dx - x0[j])
+            fr.sxy[k, m] = sx * tr
+            fr.syy[k, m] = ky * (dy - d0) * tr
+            fr.fx[k, m] = -sx
         else:
-            f_sxy[k, m] = 0.0
-            f_syy[k, m] = 0.0
+            fr.sxy[k, m] = 0.0
+            fr.syy[k, m] = 0.0
+            fr.fx[k, m] = 0.0

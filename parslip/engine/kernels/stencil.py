@@ -44,8 +44,9 @@ from .floats import like
 
 # Bits of the neighbour mask: right, up-right, up-left, left, down-left, down-right.
 R_, UR_, UL_, L_, DL_, DR_ = 1, 2, 4, 8, 16, 32
-# Columns of a block's row of constants K[b].
+# Columns of a block's row of constants K[b] (``engine.state.stiffness_constants`` fills them by these names).
 K_N, K_T, K_A, K_B, K_C, K_DAMP = range(6)
+K_SIZE = 6
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
@@ -61,7 +62,7 @@ def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def row_full(cx, cy, px, py, r, j0, n, s, K, blk, damped):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py."""
-    kn, kt, a, b, c, bb = K[blk, 0], K[blk, 1], K[blk, 2], K[blk, 3], K[blk, 4], K[blk, 5]
+    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     xm, x0, xp = cx[r, j0 - 1:j0 - 1 + n], cx[r, j0:j0 + n], cx[r, j0 + 1:j0 + 1 + n]
     ym, y0, yp = cy[r, j0 - 1:j0 - 1 + n], cy[r, j0:j0 + n], cy[r, j0 + 1:j0 + 1 + n]
     xul, xur = cx[r + 1, j0 - 1 + s:j0 - 1 + s + n], cx[r + 1, j0 + s:j0 + s + n]
@@ -93,7 +94,7 @@ def row_edge(cx, cy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy
     Adds C (ex + gx, ey + gy): the per-column external force (ex, ey), e.g.
     interface bonds, and the uniform one (gx, gy), e.g. the normal load.
     """
-    kn, kt, a, b, c, bb = K[blk, 0], K[blk, 1], K[blk, 2], K[blk, 3], K[blk, 4], K[blk, 5]
+    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     rr = r + 1 if up else r - 1
     xm, x0, xp = cx[r, j0 - 1:j0 - 1 + n], cx[r, j0:j0 + n], cx[r, j0 + 1:j0 + 1 + n]
     ym, y0, yp = cy[r, j0 - 1:j0 - 1 + n], cy[r, j0:j0 + n], cy[r, j0 + 1:j0 + 1 + n]
@@ -127,7 +128,7 @@ def node_masked(cx, cy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy):
     Without branches: a missing neighbour is read from the zero ghost cells
     around the block (or a real cell) and its difference weighed by 0.
     """
-    kn, kt, a, b, c, bb = K[blk, 0], K[blk, 1], K[blk, 2], K[blk, 3], K[blk, 4], K[blk, 5]
+    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     ux, uy = cx[r, j], cy[r, j]
     wr, wur, wul = like(mask & R_, ux), like((mask & UR_) >> 1, ux), like((mask & UL_) >> 2, ux)
     wl, wdl, wdr = like((mask & L_) >> 3, ux), like((mask & DL_) >> 4, ux), like((mask & DR_) >> 5, ux)
