@@ -125,8 +125,12 @@ def walk_commands(parser: argparse.ArgumentParser, prog: str = "parslip"):
             if id(sub) in seen:
                 continue
             seen.add(id(sub))
+            aliases = [n for n, s in action.choices.items() if s is sub and n != name]
+            own = helps.get(name) or ""
+            if aliases:
+                own = (own + "; " if own else "") + "alias: " + ", ".join(aliases)
             for i, (p, sp, h) in enumerate(walk_commands(sub, f"{prog} {name}")):
-                yield p, sp, (helps.get(name) if i == 0 else h)
+                yield p, sp, (own or None if i == 0 else h)
 
 
 @contextlib.contextmanager

@@ -46,13 +46,18 @@ def _page(site: pathlib.Path, name: str) -> str:
 
 
 def _commands(parser: argparse.ArgumentParser, prog: str = "parslip") -> list[str]:
-    """Every subcommand below ``parser`` as its command line ("parslip run"), nested ones included."""
-    found = []
+    """Every subcommand below ``parser`` as its command line ("parslip run"), nested ones included.
+
+    An alias names the same parser again: only its first name is expected on the page.
+    """
+    found, seen = [], set()
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             for name, sub in action.choices.items():
-                found.append(f"{prog} {name}")
-                found += _commands(sub, f"{prog} {name}")
+                if id(sub) not in seen:
+                    seen.add(id(sub))
+                    found.append(f"{prog} {name}")
+                    found += _commands(sub, f"{prog} {name}")
     return found
 
 
