@@ -28,3 +28,15 @@ class NonFiniteError(RunError):
 
 class SlipReachError(RunError):
     """The interface slid further than the MPI halo reaches."""
+
+
+class WriteError(RunError):
+    """A write of the output failed (no space, a quota, a folder that vanished), on some rank."""
+
+    def __init__(self, message: str, path: str = "", frames_safe: int = 0):
+        super().__init__(message)
+        self.path, self.frames_safe = path, frames_safe
+
+
+class OptionalPartMissing(ConfigError):
+    """A command needs an optional extra that is not installed: the message names the extra (exit 2)."""

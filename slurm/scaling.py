@@ -5,7 +5,7 @@ Responsible for the numbers of a scaling study; the batch script does the runs.
     python slurm/scaling.py weak-sets SCENE R [--set KEY=VALUE ...]   # --set options, one token a line
     python slurm/scaling.py max-ranks SCENE [--set KEY=VALUE ...]     # largest rank count the scene splits into
     python slurm/scaling.py header
-    python slurm/scaling.py row STUDY LOG OUT                         # one row of the table
+    python slurm/scaling.py row STUDY LOG OUT                         # one row of the table (LOG: for errors)
 
 Weak scaling keeps the lattice nodes per rank fixed: R ranks run the scene
 with R times its columns (top and substrate), so R times the contact length
@@ -13,20 +13,19 @@ l.  Scene times are in l/c_r, so ramp, settle and drive are divided by R to
 keep the number of steps, and so the run time per rank, about the same.
 
 A row: the study, ranks, lattice nodes in all and per rank, steps, the wall
-time of the time loop (from the run's last log line, "done in X s"), and
-node-updates per second = nodes x steps / that time; counts come from the
-output file's root attributes n_nodes, n_steps, n_ranks.
+time of the time loop (the output file's timing_loop_s, read through the
+output contract), and node-updates per second = nodes x steps / that time;
+counts come from the output file's root attributes n_nodes, n_steps, n_ranks.
 """
 from __future__ import annotations
 
-import re
 import sys
 
 COLUMNS = ("study", "ranks", "lattice_nodes", "nodes_per_rank", "steps", "loop_wall_s", "node_updates_per_s")
 
 
 def _scene(path, sets):
-    from parslip.cli.main import load
+    from parslip.scene.load import load
     return load(path, [s.split("=", 1)[1] if s.startswith("--set=") else s for s in sets if s != "--set"])
 
 
@@ -46,15 +45,17 @@ def max_ranks(path: str, sets: list[str]) -> int:
 
 
 def row(study: str, log: str, out: str) -> str:
-    import h5py
-    with open(log, errors="replace") as f:
-        walls = re.findall(r"done in ([0-9.]+) s:", f.read())
-    if not walls:
-        raise SystemExit(f"scaling.py: {log}: no 'done in X s' line; the run did not finish")
-    with h5py.File(out, "r") as f:
-        a = f.attrs
-        nodes, steps, ranks = int(a["n_nodes"]), int(a["n_steps"]), int(a["n_ranks"])
-    wall = float(walls[-1])
+    from parslip.io import contract
+    try:
+        a = contract.read_attrs(out)
+    except OSError:
+        raise SystemExit(f"scaling.py: {out}: no output file; the run did not finish (see {log})") from None
+    timings = contract.read_timings(out)
+    if a.get("status") != "complete" or "loop_s" not in timings:
+        raise SystemExit(f"scaling.py: {out}: status {a.get('status')!r}, no loop time; the run did not finish "
+                         f"(see {log})")
+    nodes, steps, ranks = int(a["n_nodes"]), int(a["n_steps"]), int(a["n_ranks"])
+    wall = float(timings["loop_s"])
     ups = nodes * steps / wall if wall > 0 else float("nan")
     return "\t".join(str(v) for v in (study, ranks, nodes, f"{nodes / ranks:.0f}", steps, f"{wall:.1f}", f"{ups:.4g}"))
 

@@ -1,6 +1,6 @@
 """A job that fails or is interrupted on some ranks ends, and leaves a file that opens.
 
-One rank raising (PARSLIP_TEST_FAIL=RANK:STEP, parslip.cli.run) must
+One rank raising (the test hook raise_at=RANK:STEP, parslip.hooks) must
 take the whole job down through MPI_Abort with that rank's message, not leave
 the other ranks waiting in a halo exchange or a collective write.  Ctrl-C
 (SIGINT to the launcher's whole process group, as a terminal sends it) must
@@ -38,7 +38,7 @@ def test_one_failing_rank_takes_the_job_down(tmp_path, long_scene, writer):
     t0 = time.monotonic()
     # A hang would end in TimeoutExpired, failing the test.
     p = run_cli(2, "run", long_scene, "--out", out, "--no-png", "--quiet", writer=writer,
-                env={"PARSLIP_TEST_FAIL": "1:300"}, timeout=120)
+                env={"PARSLIP_TEST_HOOKS": "raise_at=1:300"}, timeout=120)
     assert p.returncode not in (0, 2, 3), p.stderr
     assert "RuntimeError: injected failure on rank 1 at step 300" in p.stderr
     assert "MPI_Abort" in p.stderr

@@ -1,5 +1,5 @@
 """`parslip info`: every section present, the numbers it prints equal to what they claim to be (memory
-from ``engine.memory.predict``, node updates from the step counts, output bytes from a real file), and
+from ``scene.memory.predict``, node updates from the step counts, output bytes from a real file), and
 what it says the engine leaves out listed exactly where it applies."""
 import dataclasses
 import re
@@ -11,7 +11,7 @@ import pytest
 
 from helpers import FREE_BLOCK, SMALL, cli_env, scene, small_toml
 from parslip.cli import main
-from parslip.engine.memory import BASE, predict
+from parslip.scene.memory import BASE, predict
 from parslip.scene import budget, presets
 from parslip.scene.derive import derive
 from parslip.scene.load import load_scene_text, parse_set, resolve

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from parslip.bench import scaling
-from parslip.cli.main import load
+from parslip.scene.load import load
 from parslip.model.lattice import BOTTOM, TOP, Lattice
 from parslip.parallel.layout import build_layout, interface_reach
 from parslip.scene.derive import derive
@@ -115,7 +115,7 @@ def test_l500_push_on_64_ranks_what_one_sends_the_other_receives(l500_on_64):
 
 def test_halo_values_count_what_the_exchange_plan_packs(l500_on_64):
     """``scaling.rank_share`` counts from the layout; the exchange plan sizes its buffers by its own loop."""
-    from parslip.parallel.exchange import build_plan
+    from parslip.parallel.halo_mpi import build_plan
     st, lays = l500_on_64
     for r in (0, 5, 21, 32, 63):
         share = scaling.rank_share(st.lattice, lays[r])

@@ -155,8 +155,9 @@ def test_output_bitwise_identical_on_1_2_3_ranks(small_runs, writer):
     assert ref_attrs["status"] == "complete"
     for n in (1, 2, 3):
         data, attrs, log = small_runs.get(writer, n)
-        assert attrs["n_ranks"] == n and attrs["hdf5_mode"] == writer
-        assert f"writer: {writer} (" in log
+        mode = writer if n > 1 else "gather"          # one rank loads no MPI, so no collective HDF5 either
+        assert attrs["n_ranks"] == n and attrs["hdf5_mode"] == mode
+        assert f"writer: {mode} (" in log
         assert_same_datasets(data, ref, f"{writer} on {n} ranks")
 
     # The test must exercise the hard case: a bond that broke and re-formed
@@ -175,7 +176,7 @@ def test_output_bitwise_identical_on_1_2_3_ranks(small_runs, writer):
     assert crossed[2] > 0 and crossed[3] > 0, crossed
 
 
-@pytest.mark.parametrize("n", (1, 2, 3))
+@pytest.mark.parametrize("n", (2, 3))
 def test_collective_mpio_and_gathered_files_are_identical(small_runs, n):
     """Every rank writing its slices through HDF5's mpio driver gives, byte for byte, the
     datasets rank 0 writes after gathering; only hdf5_mode (and the run's own command line
@@ -185,9 +186,11 @@ def test_collective_mpio_and_gathered_files_are_identical(small_runs, n):
     (mpio, mpio_attrs, _), (gather, gather_attrs, _) = small_runs.get("mpio", n), small_runs.get("gather", n)
     assert (mpio_attrs["hdf5_mode"], gather_attrs["hdf5_mode"]) == ("mpio", "gather")
     assert_same_datasets(mpio, gather, f"mpio vs gather on {n} ranks")
-    own = {"hdf5_mode", "command", "created_utc", "run_id"}
+    own = {"hdf5_mode", "command", "created_utc", "run_id", "numpy", "numba", "python"}   # two Pythons
     assert mpio_attrs.keys() == gather_attrs.keys()
     for k in mpio_attrs.keys() - own:
+        if k.startswith("timing_"):
+            continue
         assert np.array_equal(mpio_attrs[k], gather_attrs[k]), k
 
 

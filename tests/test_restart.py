@@ -47,7 +47,7 @@ def test_killed_mid_checkpoint_then_restarted_is_bitwise_the_uninterrupted_run(t
     sc, (ref, ref_attrs) = uninterrupted
     out = tmp_path / "o.vtkhdf"
     ckpt = str(out) + ".ckpt.h5"
-    p = run_cli(n_first, "run", sc, "--out", out, "--no-png", "--quiet", env={"PARSLIP_TEST_KILL_CHECKPOINT": "2"})
+    p = run_cli(n_first, "run", sc, "--out", out, "--no-png", "--quiet", env={"PARSLIP_TEST_HOOKS": "kill_in_checkpoint=2"})
     assert p.returncode != 0
     assert os.path.exists(ckpt + ".tmp")                    # the killed write, left half-done
     with h5py.File(ckpt, "r") as f:                         # the previous checkpoint, whole

@@ -83,8 +83,24 @@ def draw_spacetime(ax, iface: dict) -> None:
         ax.imshow(intact, origin="lower", aspect="auto", interpolation="nearest",
                   cmap=ListedColormap(["white", YELLOW]), vmin=0, vmax=1,
                   extent=[x[0] - dx / 2, x[-1] + dx / 2, t[0] - dt / 2, t[-1] + dt / 2])
-    ax.set_xlabel("x / l")
-    ax.set_ylabel("t c_r / l")
+    ax.set_xlabel(r"$x/l$")
+    ax.set_ylabel(r"$t\,c_r/l$")
+
+
+def spacetime_picture(iface: dict, png: str, title: str = "") -> bool:
+    """The picture ``parslip run`` writes before it returns: the space-time diagram of the interface
+    bonds (intact yellow, broken white) with axes x/l and t c_r/l and a title.  False (nothing written)
+    for a free block, which has no interface."""
+    if len(iface["x"]) == 0:
+        return False
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(5, 6))
+    draw_spacetime(ax, iface)
+    ax.set_title((f"{title}\n" if title else "") + "interface bonds: intact (yellow), broken (white)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+    return True
 
 
 def zoom_window(run, share: float = 0.1, pad: float = 0.5, after: float = 2.0):

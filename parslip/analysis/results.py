@@ -15,18 +15,12 @@ asked for.
 """
 from __future__ import annotations
 
-import sys
 from functools import cached_property
 
 import numpy as np
 
 from ..errors import ConfigError
 from ..io import contract
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 
 class Run:
@@ -98,9 +92,19 @@ class Run:
     @cached_property
     def scene(self) -> dict:
         """The resolved scene as dotted keys -> values (``{"drive.mode": "push", ...}``)."""
-        from ..scene.load import _flatten
+        from ..io.scenefile import loads
         text = self.attrs.get("scene")
-        return _flatten(tomllib.loads(text)) if text else {}
+        return loads(text) if text else {}
+
+    @property
+    def status(self) -> str:
+        """"complete", "running" (still written, or killed), "checkpointed at step N", "failed: ..." """
+        return str(self.attrs.get("status", "?"))
+
+    @cached_property
+    def timings(self) -> dict:
+        """The run's timings in s (``io.contract.TIMINGS``): startup, compile, loop, drive, ..."""
+        return contract.read_timings(self.path)
 
     @property
     def mode(self) -> str:

@@ -421,7 +421,7 @@ def _scene_setup(spec: str, mode: str):
     if spec.isdigit():
         from .case import scene_at
         return derive(scene_at(int(spec), mode, "float64"))
-    from ..cli.main import load
+    from ..scene.load import load
     return derive(load(spec, []))
 
 

@@ -15,7 +15,7 @@ What it measures (all on this machine, nothing asserted):
   first compiled call (numba's cache loaded, or the code compiled);
 - time per interface frame written;
 - memory: the peak resident size per rank, and ``parslip info``'s prediction
-  for the same scene (``engine.memory``), with the ratio;
+  for the same scene (``scene.memory``), with the ratio;
 - the roofline: the machine's memory bandwidth (a STREAM-like triad, one
   process and one per core) and each result's bytes moved per second as a
   fraction of it, with BYTES_PER_UPDATE bytes per node update;
@@ -84,7 +84,7 @@ def time_to_result(scene: str, ranks: int, repeats: int = 3) -> float:
 
 
 def predicted_bytes(l: int, ranks: int, precision: str) -> int:
-    from ..engine.memory import predict
+    from ..scene.memory import predict
     from ..scene.derive import derive
     from .case import scene_at
     return max(predict(derive(scene_at(l, "shear", precision)), ranks)["per_rank"])

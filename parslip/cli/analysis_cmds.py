@@ -136,7 +136,7 @@ def cmd_figures(args) -> int:
     for name in args.only or ():
         if name not in FIGURE_NAMES:
             raise ConfigError(f"--only {name!r}: unknown figure; accepted: {', '.join(figures.FIGURES)}")
-    from .progress import setup_logging
+    from ..engine.progress import setup_logging
     setup_logging(0, 1)                 # the figure code logs what it skips (stress maps)
     run = open_run(args.run)
     _out_dir(args.out)
@@ -184,7 +184,7 @@ def cmd_accuracy(args) -> int:
     from ..analysis import accuracy
     from ..errors import ConfigError
     from ..scene.load import load_scene_file, parse_set, resolve
-    from .progress import setup_logging
+    from ..engine.progress import setup_logging
 
     for name in args.knob or ():
         if name not in KNOB_NAMES:

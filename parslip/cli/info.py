@@ -3,7 +3,7 @@
 Everything is derived before a run, without MPI: the lattice and its nodes,
 the materials and wave speeds, the time step and how it was found, the steps
 of each phase, the cost in node updates and wall time (``scene.budget``), the
-memory per rank from ``engine.memory.predict``, the output size, the usable
+memory per rank from ``scene.memory.predict``, the output size, the usable
 rank counts, what the engine leaves out of this scene and what that saves,
 the warnings ``scene.advice`` raises, and the quick-look preset when the
 scene differs from it.  Each line starts with a 17-column label.
@@ -43,7 +43,7 @@ def _block(label: str, items: list[str]) -> list[str]:
 
 def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[str]:
     """The lines of `parslip info` for the derived scene ``st`` on ``ranks`` ranks."""
-    from ..engine.memory import BASE, predict
+    from ..scene.memory import BASE, predict
     from ..io.output import hdf5_mode
     s, lat, mat = st.scene, st.lattice, st.material
     top, bot = lat.top, lat.bottom

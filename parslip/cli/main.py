@@ -18,8 +18,6 @@ import os
 import sys
 
 from ..errors import EXIT_BAD_INPUT, ConfigError
-from ..parallel.launcher import start_or_refuse
-from ..scene.load import load_scene_file, parse_set, resolve
 from ..scene.schema import describe_keys
 
 UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_s of the top
@@ -53,8 +51,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--stop-after", metavar="WALLTIME",
                    help="wall-clock time (HH:MM:SS or seconds) after which the run writes a checkpoint and "
                         "stops cleanly, printing the command that continues it")
-    r.add_argument("--no-png", action="store_true", help="skip the space-time PNG")
+    r.add_argument("--watchdog", type=float, metavar="SECONDS",
+                   help="on several ranks: abort the job (exit 3, output marked failed, one line naming the rank "
+                        "that stopped answering) when the ranks have not agreed for this many seconds (default: "
+                        "the scene's run.watchdog, 180 s; 0 = off)")
+    r.add_argument("--no-png", action="store_true", help="skip the space-time picture (OUT_spacetime.png)")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
+    r.set_defaults(func=lambda a: _cmd_run(a), mpi=True)
     i = sub.add_parser("info", help="derived quantities, cost, memory, output size, what is left out, warnings",
                        epilog=UNITS_HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -68,52 +71,9 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _comm():
-    from mpi4py import MPI
-    return MPI.COMM_WORLD
-
-
-def _bcast(comm, fn):
-    """Run ``fn`` on rank 0 and broadcast its value or its ConfigError."""
-    res = None
-    if comm.Get_rank() == 0:
-        try:
-            res = ("ok", fn())
-        except ConfigError as e:
-            res = ("err", str(e))
-    res = comm.bcast(res, root=0)
-    if res[0] == "err":
-        raise ConfigError(res[1])
-    return res[1]
-
-
-def load(scene_path: str, sets: list[str]) -> dict:
-    raw = load_scene_file(scene_path)
-    return resolve(raw, [parse_set(s) for s in sets])
-
-
-def _out_path(args, must_exist: bool = False, may_exist: bool = False) -> str:
-    """The output file (default out/<scene>.vtkhdf): new unless --overwrite, existing for a restart."""
-    out = args.out or os.path.join("out", os.path.splitext(os.path.basename(args.scene))[0] + ".vtkhdf")
-    if os.path.isdir(out):
-        raise ConfigError(f"--out {out!r}: is a directory; accepted: a file path")
-    if must_exist:
-        if not os.path.isfile(out):
-            raise ConfigError(f"--out {out!r}: no such file; a restart appends to the output file of the run that "
-                              f"wrote the checkpoint; accepted: that file")
-        return out
-    if os.path.exists(out) and not (args.overwrite or may_exist):
-        raise ConfigError(f"--out {out!r}: exists; accepted: a new path, --overwrite to replace it, or "
-                          f"--restart to continue it")
-    d = os.path.dirname(out)
-    try:
-        if d:
-            os.makedirs(d, exist_ok=True)
-        if not os.access(d or ".", os.W_OK):
-            raise PermissionError
-    except OSError:
-        raise ConfigError(f"--out {out!r}: cannot write in {d or '.'!r}; accepted: a writable path") from None
-    return out
+def _cmd_run(args) -> int:
+    from .run import cmd_run
+    return cmd_run(args, args.comm)
 
 
 def cmd_info(args) -> int:
@@ -121,55 +81,29 @@ def cmd_info(args) -> int:
     return info(args)
 
 
-def cmd_run(args) -> int:
-    from .run import cmd_run as run
-    return run(args, _comm(), lambda fn: _bcast(_comm(), fn), load, _out_path)
-
-
-ABORT_GRACE_S = 1.0     # s: time for the launcher to forward a failing rank's traceback
-
-
 def main(argv=None) -> int:
+    """Parse, start MPI only when a launcher started several processes, run the subcommand, and map
+    every failure to one line and its exit code (the errors carry them: ``parslip.errors``)."""
     args = _parser().parse_args(argv)
-    if args.cmd == "run" and (refused := start_or_refuse()):   # before anything touches MPI
-        return refused
-    try:
-        return _main(args)
-    except Exception:
-        # An unexpected error on one rank must not leave the others waiting
-        # in a collective forever: print it and take the whole job down.
-        if args.cmd == "run" and _comm().Get_size() > 1:
-            import traceback
-            comm = _comm()
-            traceback.print_exc()
-            # Our own line: the MPI library's "MPI_Abort" notice races the launcher's shutdown and is
-            # sometimes lost, so the user would not learn why the other ranks stopped.
-            print(f"parslip {comm.Get_rank()}/{comm.Get_size()} ERROR: this rank failed; MPI_Abort(1) ends "
-                  f"every rank", file=sys.stderr)
-            sys.stderr.flush()
-            # The launcher's proxy forwards this rank's stderr asynchronously, and
-            # Abort kills the proxies: without a pause the message that says what
-            # went wrong is lost about one time in three (measured, both MPIs).
-            import time
-            time.sleep(ABORT_GRACE_S)
-            _comm().Abort(1)
-        raise
-
-
-def _main(args) -> int:
+    comm = None
+    if getattr(args, "mpi", False):
+        from ..parallel.launcher import LauncherError, world_comm
+        try:
+            comm = world_comm()                 # None for one process: no MPI library is loaded
+        except LauncherError as e:
+            if e.speak:
+                print(f"parslip: error: {e}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+    args.comm = comm
+    rank = comm.Get_rank() if comm is not None else 0
     try:
         if args.cmd == "keys":
             print(describe_keys())
             return 0
         if args.cmd == "info":
             return cmd_info(args)
-        if args.cmd == "run":
-            return cmd_run(args)
         return args.func(args)
     except ConfigError as e:
-        rank = 0
-        if args.cmd == "run":
-            rank = _comm().Get_rank()
         if rank == 0:
             print(f"parslip: error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -22,7 +22,7 @@ from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
-from .memory import frame_buffer
+from ..scene.memory import frame_buffer
 from .state import State
 
 # Work per compiled call, in node updates: about 0.3 s, so progress and output stay timely.
@@ -72,7 +72,8 @@ class Simulation:
         # Steps per compiled call before any agreement: from the lattice and rank count, the same everywhere.
         self.chunk = int(np.clip(CHUNK_UPDATES * size / max(lat.n_nodes, 1), 64, 200_000))
         self.n = 0
-        self.drive_clock = None          # (time.monotonic(), time.process_time()) at the drive's first step
+        self.drive_clock = None          # (time.monotonic(), time.process_time(), step) when the drive began
+        self.monitor = None              # engine.monitor.Monitor of the run, if any: told the phase
         self._snap = {st.n_drive_start + k: j for j, k in enumerate(st.snapshot_steps)}
         self.snapshots_total = len(self._snap)
         self.snapshots_written = 0
@@ -126,12 +127,19 @@ class Simulation:
         n = self.n if n is None else n
         return self.state.potential_energy(n, self.load_factor(n) if load is None else load)
 
+    def compile(self):
+        """The first call of the compiled loop, taking no step: numba compiles it (or loads it from its
+        cache) here, so that progress rates and the ETA never count it."""
+        self._phase("compile")
+        self.advance(self.n)
+
     def run(self, writer=None, until: int | None = None, control=None):
         """Advance to step ``until`` (default: the end), writing frames and snapshots on the way.
 
-        ``control`` (``cli.run.RunControl``) is asked between calls of the compiled loop, on every
+        ``control`` (``engine.control.RunControl``) agrees, between calls of the compiled loop and on every
         rank at the same step, whether to stop for a checkpoint or for good: then ``run`` returns its
         action with every frame so far written, and a later ``run`` carries on.  Returns None at the end.
+        Every call of the loop ends at a step computed from data all ranks hold (see ``engine.loop``).
         """
         st = self.setup
         end = st.n_steps if until is None else until
@@ -139,7 +147,7 @@ class Simulation:
         while True:
             self._snapshot(writer)
             if control is not None:
-                action, steps = control.decide(self)
+                action, steps = control.agree(self)
                 chunk = steps or chunk
                 if action is not None:
                     self._flush(writer)
@@ -149,9 +157,10 @@ class Simulation:
             target = min(end, self.n + chunk, min((k for k in self._snap if k > self.n), default=end),
                          control.next_stop(self.n) if control is not None else end,
                          st.n_drive_start if self.n < st.n_drive_start else end)
-            why = self.advance(target)
             if self.drive_clock is None and self.n >= st.n_drive_start:
-                self.drive_clock = (time.monotonic(), time.process_time())
+                self.drive_clock = (time.monotonic(), time.process_time(), self.n)
+            self._phase("loop")
+            why = self.advance(target)
             if why == L.FRAMES_FULL:
                 self._flush(writer)
                 continue
@@ -160,6 +169,10 @@ class Simulation:
         self.advance(self.n)                 # the frame of the last step, if it is one
         self._flush(writer)
         return None
+
+    def _phase(self, name: str):
+        if self.monitor is not None:
+            self.monitor.phase(name)
 
     # --------------------------------------------------------------- output --
     @property
@@ -177,6 +190,7 @@ class Simulation:
         return st.to_lcr((np.asarray(steps) - st.n_drive_start) * st.dt)
 
     def _flush(self, writer):
+        self._phase("write frames")
         fr = self.frames
         count = int(fr.cursor[L.C_COUNT])
         if count:
@@ -195,8 +209,10 @@ class Simulation:
         d0 = np.zeros(s.n_owned, s.dtype)
         top = s.own_block == TOP
         d0[top] = s.drive.drive0[s.own_prow[top], s.own_j[top]]
+        fd = np.zeros(s.n_owned, s.dtype)
+        fd[np.searchsorted(s.gid, s.driven_gid)] = s.drive.force
         parts = {"gid": s.gid, "u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
-                 "drive0": d0}
+                 "drive0": d0, "drive_force": fd}
         if lat.has_interface:
             sl = s.owned_sites()
             parts.update(site=np.arange(sl.stop - sl.start) + s.site0(), partner=s.iface.partner[sl].copy(),
@@ -215,6 +231,7 @@ class Simulation:
             s.set_owned_u(level, arrays[name][s.gid])
         top = s.own_block == TOP
         s.drive.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
+        s.drive.force[:] = arrays["drive_force"][s.driven_gid]
         if st.lattice.has_interface:
             sl = s.owned_sites()
             sites = np.arange(sl.stop - sl.start) + s.site0()
@@ -260,6 +277,7 @@ class Simulation:
         self.snapshots_written = j + 1
         if writer is None:
             return
+        self._phase("snapshot")
         st = self.setup
         t = st.to_lcr((self.n - st.n_drive_start) * st.dt)
         pos, vel, sig = self.state.node_fields(self.n)

@@ -5,6 +5,7 @@ read it back):
 
   /u, /u_prev     float [nodes, 2]   displacements u(n) and u(n-1), in a (the state's float type)
   /drive0         float [nodes]      x displacement of each node when the drive started (driven nodes)
+  /drive_force    float [nodes]      the x-force the drive applied to each driven node in the last step
   /partner, /x0   int64, float [sites]  interface bonds: substrate site bonded to (-1 broken), rest offset x0
   root attributes  the step n, the resolved scene (TOML), omega_max and dt, the output cursor (frames and
                    snapshots written), the bond event counters, the run id shared with the output file,
@@ -25,10 +26,10 @@ import numpy as np
 
 from ..errors import ConfigError
 
-FORMAT = "parslip checkpoint 1"
+FORMAT = "parslip checkpoint 2"          # 2: with drive_force
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
-             "checkpoint.every", "checkpoint.wall", "interface.slip_reach")
-DATASETS = ("u", "u_prev", "drive0", "partner", "x0")
+             "output.buffer_frames", "checkpoint.every", "checkpoint.wall", "interface.slip_reach", "run.watchdog")
+DATASETS = ("u", "u_prev", "drive0", "drive_force", "partner", "x0")
 
 
 def path_for(out: str) -> str:
@@ -36,20 +37,21 @@ def path_for(out: str) -> str:
     return out + ".ckpt.h5"
 
 
-KILL_VAR = "PARSLIP_TEST_KILL_CHECKPOINT"
 _written = 0
 
 
 def write(path: str, parts: dict, attrs: dict) -> None:
     """Write a checkpoint (rank 0 only): ``parts`` are whole arrays in global order.
 
-    For the tests of atomicity, ``PARSLIP_TEST_KILL_CHECKPOINT=K`` kills this
+    For the tests of atomicity, the hook ``kill_in_checkpoint=K`` (``parslip.hooks``) kills this
     process with SIGKILL halfway through writing its K-th checkpoint.
     """
     import h5py
+
+    from .. import hooks
     global _written
     _written += 1
-    kill = os.environ.get(KILL_VAR) == str(_written)
+    kill = hooks.get("kill_in_checkpoint") == _written
     tmp = path + ".tmp"
     with h5py.File(tmp, "w") as f:
         for name in DATASETS:
@@ -90,7 +92,7 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
     """Check a checkpoint before use; returns its attributes.  Raises ConfigError (exit 2) with one line."""
     import h5py
 
-    from ..scene.load import load_scene_text
+    from .scenefile import loads
     if not os.path.isfile(path):
         raise ConfigError(f"--restart {path!r}: no such file; accepted: a checkpoint written by parslip run "
                           f"(OUT.ckpt.h5)")
@@ -102,18 +104,21 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
         raise ConfigError(f"--restart {path!r}: not a readable HDF5 file ({e.__class__.__name__}); accepted: a "
                           f"checkpoint written by parslip run") from None
     if attrs.get("format") != FORMAT:
-        raise ConfigError(f"--restart {path!r}: not a parslip checkpoint; accepted: a file written by parslip run "
-                          f"as OUT.ckpt.h5")
+        old = str(attrs.get("format", "")).startswith("parslip checkpoint")
+        raise ConfigError(f"--restart {path!r}: " + (f"a checkpoint of an older format ({attrs.get('format')!r}); "
+                                                     f"accepted: {FORMAT!r}, written by this version of parslip run"
+                                                     if old else "not a parslip checkpoint; accepted: a file written "
+                                                     "by parslip run as OUT.ckpt.h5"))
     if int(attrs.get("complete", 0)) != 1:
         raise ConfigError(f"--restart {path!r}: incomplete checkpoint (the writer stopped before finishing); "
                           f"accepted: a complete checkpoint")
-    want = {"u": (n_nodes, 2), "u_prev": (n_nodes, 2), "drive0": (n_nodes,), "partner": (n_sites,),
-            "x0": (n_sites,)}
+    want = {"u": (n_nodes, 2), "u_prev": (n_nodes, 2), "drive0": (n_nodes,), "drive_force": (n_nodes,),
+            "partner": (n_sites,), "x0": (n_sites,)}
     for name, shape in want.items():
         if shapes.get(name) != shape:
             raise ConfigError(f"--restart {path!r}: dataset /{name} has shape {shapes.get(name)}, this scene needs "
                               f"{shape}; accepted: a checkpoint of the same lattice")
-    saved = load_scene_text(str(attrs["scene"]))
+    saved = loads(str(attrs["scene"]))
     for key in sorted(set(saved) | set(scene)):
         if key in SAFE_KEYS:
             continue
@@ -121,6 +126,26 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
             raise ConfigError(f"--restart {path!r}: {key} = {scene.get(key)!r} but the checkpoint was written with "
                               f"{saved.get(key)!r}; accepted: the same scene, except {', '.join(SAFE_KEYS)}")
     return attrs
+
+
+def write_collective(comm, path: str, parts: dict, attrs: dict, n_nodes: int, n_sites: int) -> None:
+    """Collective: every rank's share (``parts``: arrays by global node id "gid" or site index "site",
+    from ``Simulation.checkpoint_parts``) gathered on rank 0, which writes them atomically (``write``)."""
+    arrays = {}
+    for name, key, n in (("u", "gid", n_nodes), ("u_prev", "gid", n_nodes), ("drive0", "gid", n_nodes),
+                         ("drive_force", "gid", n_nodes), ("partner", "site", n_sites), ("x0", "site", n_sites)):
+        arrays[name] = gather_global(comm, parts[key], parts[name], n)
+    err = None
+    if comm is None or comm.Get_rank() == 0:
+        try:
+            write(path, arrays, attrs)
+        except OSError as e:
+            err = f"cannot write the checkpoint {path} ({e.__class__.__name__}: {e})"
+    if comm is not None and comm.Get_size() > 1:
+        err = comm.bcast(err, root=0)               # every rank fails alike, none waits for another
+    if err:
+        from ..errors import WriteError
+        raise WriteError(err, path=path)
 
 
 def gather_global(comm, gid: np.ndarray, values: np.ndarray, total: int) -> np.ndarray | None:

@@ -13,8 +13,15 @@ The writer (``io.output``) creates exactly these datasets and the readers
                                                sxy = -f_x / (a rho c_r^2), syy = -f_y / (a rho c_r^2),
                                                f the interface bond's force on the top node (0 if broken);
                                                syy < 0 is compression
+  /interface/friction_force  float64 [frames]  F_T, the sum over the interface bonds of their x-force on
+                                               the block (m c^2/a, F_N's unit), summed in global site order:
+                                               < 0 while the interface holds the block back
+  /interface/drive_force     float64 [frames]  the sum over the driven nodes of the x-force the drive
+                                               applied in the step that ended at the frame (m c^2/a)
+  /interface/mu              float64 [frames]  -F_T / F_N, the friction coefficient the interface mobilises
   /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots
-  root attributes                              resolved scene (TOML), provenance, derived constants, status
+  root attributes                              resolved scene (TOML), provenance, derived constants, status,
+                                               and the run's timings (``TIMINGS``, named timing_<name>)
 
 A frame at drive step k records the displacements u(k) and the bond state as
 it entered that step.  ``/interface`` attribute ``frames_written`` says how
@@ -36,16 +43,35 @@ INTERFACE_DATASETS = {
     "syy": (np.float64, True, "rho c_r^2 (interface traction, -f_y/a; < 0 compressive)"),
     "time": (np.float64, False, "l/c_r"),
     "x": (np.float64, False, "l"),
+    "friction_force": (np.float64, False, "m c^2/a (F_N's unit): sum of the bonds' x-forces on the block"),
+    "drive_force": (np.float64, False, "m c^2/a: sum of the drive's x-forces on the driven nodes"),
+    "mu": (np.float64, False, "-friction_force / F_N"),
 }
 FRAME_FIELDS = ("intact", "partner", "ux", "uy", "sxy", "syy")
+# One value per frame, like ``time``.
+FORCE_DATASETS = ("friction_force", "drive_force", "mu")
+PER_FRAME_1D = ("time",) + FORCE_DATASETS
+
+# The run's timings, root attributes named TIMING_PREFIX + name, in seconds unless said.
+TIMING_PREFIX = "timing_"
+TIMINGS = {
+    "startup_s": "from the call to the first step: scene, omega_max, arrays, output file",
+    "compile_s": "the first call of the compiled loop: compiling it, or loading it from numba's cache",
+    "loop_s": "from the first step to the last (every phase, output and agreements included)",
+    "drive_s": "the drive phase alone, wall clock",
+    "drive_cpu_s": "the drive phase alone, CPU time of rank 0",
+    "steps": "steps taken by this run (a restart counts its own)",
+    "drive_steps": "drive steps taken by this run",
+    "node_updates_per_s": "steps x nodes / loop_s",
+}
 
 
 def read_interface(path: str) -> dict:
     """The interface record of a run file: every dataset above, cut to the frames written.
 
     Returns a dict of numpy arrays keyed by dataset name (``t`` is an alias of
-    ``time``).  Datasets a file does not hold (older files have no tractions)
-    are left out.
+    ``time``).  Datasets a file does not hold (older files have no tractions
+    or forces) are left out.
     """
     import h5py
 
@@ -55,7 +81,7 @@ def read_interface(path: str) -> dict:
         out = {}
         for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
             if name in g:
-                out[name] = g[name][:n] if per_frame or name == "time" else g[name][...]
+                out[name] = g[name][:n] if per_frame or name in PER_FRAME_1D else g[name][...]
         out["t"] = out["time"]
         return out
 
@@ -115,3 +141,9 @@ def read_snapshot_times(path: str) -> np.ndarray:
         if VTKHDF not in f or "Steps" not in f[VTKHDF]:
             return np.zeros(0)
         return np.asarray(f[VTKHDF]["Steps"]["Values"][...], dtype=float)
+
+
+def read_timings(path: str) -> dict:
+    """The run's timings (``TIMINGS``) from its root attributes; {} for a file written without them."""
+    attrs = read_attrs(path)
+    return {k[len(TIMING_PREFIX):]: v for k, v in attrs.items() if k.startswith(TIMING_PREFIX)}

@@ -17,11 +17,11 @@ import subprocess
 import h5py
 import numpy as np
 
-from .. import __version__
-from ..errors import ConfigError
+from .. import __version__, hooks
+from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from ..scene.schema import to_toml
-from .contract import FRAME_FIELDS, INTERFACE_DATASETS
+from .contract import FORCE_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, TIMING_PREFIX
+from .scenefile import to_toml
 
 VTK_LINE = 3
 
@@ -78,12 +78,20 @@ def _early():
 
 
 class Output:
-    """Writes the contract above; every method is collective over the ranks."""
+    """Writes the contract above; every method is collective over the ranks.
+
+    A write that fails (no space, a quota, a folder that vanished) does not
+    raise on the failing rank alone: every public write ends by agreeing on
+    errors (``_agree_write``), so all ranks raise the same ``WriteError`` at
+    the same call and none is left waiting in a collective.
+    """
 
     def __init__(self, path: str, sim, comm=None, provenance: dict | None = None, resume: str | None = None):
         """Create ``path`` for a new run, or with ``resume`` (the checkpoint's run id) reopen it to append."""
         self.sim, self.comm, self.path = sim, comm, path
         self._handles = {}
+        self._error = None                 # the first failed write on this rank: (what, OSError text)
+        self.frames_safe = 0               # frames written before the first failed write
         st, lay, lat = sim.setup, sim.layout, sim.setup.lattice
         self.rank = lay.rank
         self.size = lay.size
@@ -107,6 +115,8 @@ class Output:
         self.n_cells = self.n_bulk_cells + self.n_sites
         lo, hi = lay.owned_sites() if lat.has_interface else (0, 0)
         self.top_gid = lat.gid(TOP, 0, np.arange(lo, hi)).astype(np.int64)
+        self.driven_gid = sim.state.driven_gid
+        self.fn = float(st.scene["load.FN"])
         # A bond to a rigid substrate has no substrate node: drawn, like a broken bond, as a point-line.
         self.bottom_gid_of_site = ((lambda q: np.full(np.shape(q), -1, np.int64)) if lat.rigid else
                                    (lambda q: lat.gid(BOTTOM, lat.bottom.rows - 1, q)))
@@ -152,17 +162,41 @@ class Output:
             ds = self._handles[name] = self.f[name]
         return ds
 
+    def _write(self, what, fn):
+        """Run one write; keep the first failure instead of raising it on this rank alone."""
+        if self._error is not None:
+            return
+        try:
+            fn()
+        except OSError as e:
+            self._error = (what, f"{e.__class__.__name__}: {e}")
+
     def _put(self, name, index, data):
         """Write my slice ``index`` (a tuple of slices) of dataset ``name``."""
         if self.mode == "mpio":
-            self._ds(name)[index] = data
+            self._write(name, lambda: self._ds(name).__setitem__(index, data))
             return
         parts = [(index, data)] if self.size == 1 else self.comm.gather((index, data), root=0)
         if self.root:
-            ds = self._ds(name)
-            for idx, d in parts:
-                if np.size(d):
-                    ds[idx] = d
+            def put():
+                ds = self._ds(name)
+                for idx, d in parts:
+                    if np.size(d):
+                        ds[idx] = d
+            self._write(name, put)
+
+    def _agree_write(self):
+        """Collective: raise ``WriteError`` on every rank if a write failed on any."""
+        err = self._error
+        if self.size > 1:
+            errs = [e for e in self.comm.allgather(err) if e]
+            err = errs[0] if errs else None
+        if err:
+            self._error = err
+            what, text = err
+            raise WriteError(f"cannot write {self.path} ({text}, dataset /{what}); frames 0 to "
+                             f"{self.frames_safe - 1} of the interface record are in the file", path=self.path,
+                             frames_safe=self.frames_safe)
 
     def _create(self, st, prov):
         """Create every dataset (collective under mpio), sized for this run and growable for a restart."""
@@ -205,7 +239,7 @@ class Output:
             elif per_frame:
                 ds = g.create_dataset(name, shape=(nf, ns), maxshape=(None, ns), dtype=dt_,
                                       chunks=(rows, ns), dcpl=_early())
-            elif name == "time":
+            elif name == "time" or name in FORCE_DATASETS:
                 ds = g.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=dt_, chunks=(max(rows, 64),),
                                       dcpl=_early())
             else:
@@ -282,8 +316,9 @@ class Output:
             g = f["interface"]
             nf = self.sim.frames_total
             for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
-                if (per_frame and self.n_sites) or name == "time":
-                    g[name].resize(nf, axis=0)
+                if (per_frame and self.n_sites) or name == "time" or name in FORCE_DATASETS:
+                    if name in g:
+                        g[name].resize(nf, axis=0)
             if "VTKHDF" in f:
                 old = f["VTKHDF/NumberOfPoints"].shape[0]
                 for name, shape in self._vtk_shapes(self.sim.snapshots_total).items():
@@ -297,15 +332,51 @@ class Output:
     # --------------------------------------------------------------- writes --
     def interface_frames(self, k0, count, frames, times):
         """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites,
-        recorded at ``times`` (l/c_r)."""
+        recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``)."""
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
+        fail = hooks.get("write_error_at_frame")
+        if fail is not None and self.rank == 0 and k0 + count > fail and self._error is None:
+            self._error = ("interface/intact", f"OSError: [Errno 28] No space left on device (injected by "
+                                               f"{hooks.VARIABLE})")
         for name in FRAME_FIELDS:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
-        if self.f is not None:
-            if self.root:
+        sums = self.forces(frames.fx[:count], frames.fdrive[:count])
+        if self.root:
+            def put():
                 self._ds("interface/time")[k0:k0 + count] = times
-            self.f["interface"].attrs["frames_written"] = k0 + count
+                for name, values in sums.items():
+                    self._ds(f"interface/{name}")[k0:k0 + count] = values
+            self._write("interface/time", put)
+        if self.f is not None:
+            self._write("interface", lambda: self.f["interface"].attrs.__setitem__("frames_written", k0 + count))
+        self._agree_write()
+        self.frames_safe = k0 + count
+
+    def forces(self, fx, fdrive) -> dict:
+        """Rank 0: the per-frame sums over the whole interface and every driven node, in global order, so
+        they are the same bits on any rank count (each rank's values travel to rank 0, which sums them):
+        friction_force = sum of the bonds' x-forces on the block, drive_force = sum of the drive's
+        x-forces, mu = -friction_force / F_N."""
+        if self.size > 1:
+            parts = self.comm.gather((self.site0, fx, self.driven_gid, fdrive), root=0)
+        else:
+            parts = [(self.site0, fx, self.driven_gid, fdrive)]
+        if not self.root:
+            return {}
+        count = fx.shape[0]
+        fx_all = np.zeros((count, self.n_sites))
+        gids, fd = [], []
+        for s0, f, g, d in parts:
+            fx_all[:, s0:s0 + f.shape[1]] = f
+            gids.append(g)
+            fd.append(d)
+        gids = np.concatenate(gids) if gids else np.zeros(0, np.int64)
+        fd_all = np.concatenate(fd, axis=1) if fd else np.zeros((count, 0))
+        fd_all = np.ascontiguousarray(fd_all[:, np.argsort(gids, kind="stable")], dtype=np.float64)
+        friction, drive = _ordered_sum(fx_all), _ordered_sum(fd_all)
+        mu = -friction / self.fn if self.fn > 0 else np.full(count, np.nan)
+        return {"friction_force": friction, "drive_force": drive, "mu": mu}
 
     def snapshot(self, k, t, pos, vel, sig, partner):
         N, M = self.n_nodes, self.n_cells
@@ -329,21 +400,66 @@ class Output:
         self._put("VTKHDF/CellData/interface", (slice(i0, i0 + ns),), np.ones(ns, np.uint8))
         self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
         if self.f is not None:
-            v = self.f["VTKHDF"]
-            v["Steps/Values"].resize((k + 1,))
-            if self.root:
-                v["Steps/Values"][k] = t
-            # NSteps must never be below len(Values): VTK's reader corrupts memory otherwise.
-            v["Steps"].attrs["NSteps"] = np.int64(k + 1)
+            def steps():
+                v = self.f["VTKHDF"]
+                v["Steps/Values"].resize((k + 1,))
+                if self.root:
+                    v["Steps/Values"][k] = t
+                # NSteps must never be below len(Values): VTK's reader corrupts memory otherwise.
+                v["Steps"].attrs["NSteps"] = np.int64(k + 1)
+            self._write("VTKHDF/Steps", steps)
+        self._agree_write()
 
     def flush(self):
         """Everything written so far onto disk (collective): done at start-up and before each checkpoint."""
         if self.f is not None:
+            self._write("(flush)", self.f.flush)
+        self._agree_write()
+
+    def set_attrs(self, attrs: dict):
+        """Root attributes (collective under mpio): e.g. the run's timings (``contract.TIMINGS``)."""
+        if self.f is not None:
+            def put():
+                for k, v in attrs.items():
+                    self.f.attrs[k] = v
+            self._write("(attributes)", put)
+        self._agree_write()
+
+    def set_timings(self, timings: dict):
+        self.set_attrs({TIMING_PREFIX + k: float(v) for k, v in timings.items()})
+
+    def mark_failed(self, reason: str) -> bool:
+        """From the monitor thread of rank 0 in gather mode, while the other ranks may hang: status
+        "failed: REASON", flushed.  Not collective; False when this rank does not hold the file alone."""
+        if self.f is None or self.mode == "mpio":
+            return False
+        try:
+            self.f.attrs["status"] = f"failed: {reason}"
             self.f.flush()
+            return True
+        except Exception:                               # noqa: BLE001 - a best effort before an abort
+            return False
 
     def close(self, status: str = "complete"):
+        """Set the status and close (collective).  After a failed write, close as best it can: the status
+        line and what is already on disk matter more than a second error."""
         if self.f is not None:
-            self.f.attrs["status"] = status
+            f, self.f = self.f, None
             self._handles = {}
-            self.f.close()
-            self.f = None
+            try:
+                f.attrs["status"] = status
+                f.close()
+            except Exception:                           # noqa: BLE001
+                if self._error is None:
+                    raise
+                try:
+                    f.close()
+                except Exception:                       # noqa: BLE001
+                    pass
+
+
+def _ordered_sum(values: np.ndarray) -> np.ndarray:
+    """Each row's sum in index order, one addition at a time (an accumulate, not NumPy's pairwise sum)."""
+    if values.shape[1] == 0:
+        return np.zeros(values.shape[0])
+    return np.cumsum(values, axis=1)[:, -1].copy()

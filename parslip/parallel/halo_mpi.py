@@ -30,8 +30,9 @@ Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf
                           "req status handles rflags")
 
 
-def build_plan(layout, dtype, comm) -> Plan:
-    """Index arrays and buffers of ``layout``'s exchange, in local columns; MPI handles from ``comm``."""
+def build_plan(layout, dtype, comm=None) -> Plan:
+    """Index arrays and buffers of ``layout``'s exchange, in local columns; MPI handles from ``comm``
+    (without one, a plan to inspect, e.g. its buffer sizes, not to run)."""
     from ..model.lattice import TOP
 
     blocks = layout.blocks
@@ -63,7 +64,7 @@ def build_plan(layout, dtype, comm) -> Plan:
 
     sb_ptr = sizes(ss, ss_ptr, sts, sts_ptr)
     rb_ptr = sizes(rs, rs_ptr, rts, rts_ptr)
-    h = mpi.handles(comm, dtype)
+    h = mpi.handles(comm, dtype) if comm is not None else np.zeros(4, mpi.HANDLE_DTYPE)
     req = np.zeros(2 * len(peers), mpi.REQUEST_DTYPE)
     status = np.zeros(max(1, 2 * len(peers)) * mpi.STATUS_BYTES, np.uint8)
     return Plan(peer=np.array([p.rank for p in peers], np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,

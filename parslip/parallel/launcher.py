@@ -238,6 +238,15 @@ def start_mpi(env=None):
     return comm
 
 
+def world_comm(env=None):
+    """COMM_WORLD when a launcher started several processes (MPI starts here, checked as ``start_mpi``
+    does), else None: a process started alone, or by ``mpiexec -n 1``, loads no MPI library at all."""
+    launcher = detect_launcher(env)
+    if launcher is None or launcher.size == 1:
+        return None
+    return start_mpi(env)
+
+
 def start_or_refuse() -> int:
     """For the command line: 0 when MPI is up, else the refusal printed once and exit code 2."""
     try:

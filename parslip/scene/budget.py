@@ -8,15 +8,15 @@ For `parslip info`; every number is computed from the ``Setup``:
 - output: the bytes of data the run file's datasets hold (``io.contract``,
   ``io.output``), without HDF5's own few kilobytes of metadata;
 - left out: what the engine does not build or compute for this scene, and
-  what that saves in bytes (``engine.memory.predict`` of the scene with and
+  what that saves in bytes (``scene.memory.predict`` of the scene with and
   without it) and in node updates or multiplications per step.
 """
 from __future__ import annotations
 
 import dataclasses
 
-from ..engine.memory import predict
-from ..io.contract import FRAME_FIELDS, INTERFACE_DATASETS
+from .memory import predict
+from ..io.contract import FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D
 from ..model.lattice import BOTTOM, Lattice
 from .schema import SCHEMA
 
@@ -54,14 +54,14 @@ def bulk_cells(lat: Lattice) -> int:
 def output_bytes(st) -> dict:
     """Bytes of data in the run file: {'interface': ..., 'snapshots': ..., 'total': ...}.
 
-    interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame (time)
-    + 8 per site (x); snapshots: each holds every node (72 B) and every bond as a line cell (27 B:
+    interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame for each
+    of time, friction_force, drive_force and mu + 8 per site (x); snapshots: each holds every node (72 B) and every bond as a line cell (27 B:
     bulk bonds and one per interface site) and a few offsets.
     """
     lat = st.lattice
     frames, sites = st.n_frames, lat.n_top_sites
     per_site = sum(INTERFACE_DATASETS[name][0]().itemsize for name in FRAME_FIELDS)
-    iface = frames * sites * per_site + frames * 8 + sites * 8
+    iface = frames * sites * per_site + frames * 8 * len(PER_FRAME_1D) + sites * 8
     cells = bulk_cells(lat) + sites
     snaps = st.n_snapshots * (lat.n_nodes * SNAPSHOT_NODE_BYTES + cells * SNAPSHOT_CELL_BYTES
                               + SNAPSHOT_FIXED_BYTES)

@@ -6,29 +6,42 @@ what is accepted.  The CLI turns that into exit code 2.
 """
 from __future__ import annotations
 
-import sys
 from typing import Any
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
 from ..errors import ConfigError
+from ..io import scenefile
 from ..model.physics import max_nu
 from . import limits
 from .schema import SCHEMA
 
 
-def _flatten(tree: dict, prefix: str = "") -> dict[str, Any]:
-    out = {}
-    for k, v in tree.items():
-        name = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out.update(_flatten(v, name + "."))
-        else:
-            out[name] = v
-    return out
+def load(scene, sets=None) -> dict[str, Any]:
+    """The one scene loader: a scene, then overrides, then every check; a flat, validated dict.
+
+    ``scene`` is a TOML file path or a mapping (flat ``{"drive.v0": 1e-3}`` or nested
+    ``{"drive": {"v0": 1e-3}}``); ``sets`` is a mapping ``{key: value}`` or a list of ``"KEY=VALUE"``
+    strings (values as TOML literals, as ``--set`` takes them).  Raises ``ConfigError`` naming the key,
+    the value and what is accepted.
+    """
+    import os
+    if isinstance(scene, (str, os.PathLike)):
+        raw = load_scene_file(os.fspath(scene))
+    elif isinstance(scene, dict):
+        raw = scenefile.flatten(scene)
+    else:
+        raise ConfigError(f"scene {scene!r}: accepted: a TOML file path or a mapping of scene keys")
+    return resolve(raw, overrides(sets))
+
+
+def overrides(sets) -> list[tuple[str, Any]]:
+    """``{key: value}`` or ``["KEY=VALUE", ...]`` (or None) as a list of (key, value)."""
+    if not sets:
+        return []
+    if isinstance(sets, dict):
+        return [(str(k), v) for k, v in sets.items()]
+    if isinstance(sets, str):
+        sets = [sets]
+    return [parse_set(s) for s in sets]
 
 
 def _typed(name: str, value: Any) -> Any:
@@ -48,8 +61,8 @@ def parse_set(item: str) -> tuple[str, Any]:
         raise ConfigError(f"--set {item!r}: expected key=value, e.g. drive.v0=1e-3")
     name, text = (s.strip() for s in item.split("=", 1))
     try:
-        value = tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+        value = scenefile.loads(f"v = {text}")["v"]
+    except scenefile.TOMLDecodeError:
         # Python spellings TOML refuses (.01, 5.), then a bare word as a string: drive.mode=pull
         try:
             value = float(text)
@@ -60,13 +73,12 @@ def parse_set(item: str) -> tuple[str, Any]:
 
 def load_scene_file(path: str) -> dict[str, Any]:
     try:
-        with open(path, "rb") as f:
-            return _flatten(tomllib.load(f))
+        return scenefile.load_file(path)
     except FileNotFoundError:
         raise ConfigError(f"scene {path!r}: no such file; accepted: a TOML scene such as run/push.toml") from None
     except IsADirectoryError:
         raise ConfigError(f"scene {path!r}: is a directory; accepted: a TOML scene file") from None
-    except tomllib.TOMLDecodeError as e:
+    except scenefile.TOMLDecodeError as e:
         raise ConfigError(f"scene {path!r}: malformed TOML ({e}); accepted: a TOML scene file") from None
     except UnicodeDecodeError:
         raise ConfigError(f"scene {path!r}: not UTF-8 text; accepted: a TOML scene file") from None
@@ -74,7 +86,7 @@ def load_scene_file(path: str) -> dict[str, Any]:
 
 def load_scene_text(text: str) -> dict[str, Any]:
     """A scene stored as TOML text (output files and checkpoints keep the resolved scene), flattened."""
-    return _flatten(tomllib.loads(text))
+    return scenefile.loads(text)
 
 
 def resolve(raw: dict[str, Any], overrides: list[tuple[str, Any]] = ()) -> dict[str, Any]:

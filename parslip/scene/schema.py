@@ -11,9 +11,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
-import tomli_w
-
 from ..errors import ConfigError  # noqa: F401  (re-exported: schema users raise it)
+from ..io.scenefile import to_toml  # noqa: F401  (the scene as TOML text lives with the file format)
 
 
 @dataclass(frozen=True)
@@ -101,24 +100,22 @@ SCHEMA: dict[str, Key] = {
                          "what a run writes: the interface record and whole-lattice snapshots, or the "
                          "interface record only (no snapshot is computed, held or written)"),
     "output.progress_s": Key(10.0, float, "s", "> 0", _range(0.0, lo_open=True),
-                             "wall-clock interval between progress lines"),
+                             "wall-clock interval between progress lines (at most 30 s without a terminal)"),
+    "output.buffer_frames": Key(0, int, "frames", ">= 0 (0 = auto: 8 MiB of frames on the widest slab)",
+                                _range(0), "interface frames held in memory between writes, the same on every "
+                                "rank; changes no result"),
     # checkpoints -------------------------------------------------------------------
     "checkpoint.every": Key(0.0, float, "l/c_r", ">= 0 (0 = none on a simulated-time cadence)", _range(0.0),
                             "simulated time between checkpoints (OUT.ckpt.h5, replaced atomically)"),
     "checkpoint.wall": Key(0.0, float, "s", ">= 0 (0 = none on a wall-clock cadence)", _range(0.0),
                            "wall-clock time between checkpoints"),
+    # the run's supervision ---------------------------------------------------------
+    "run.watchdog": Key(180.0, float, "s", ">= 0 (0 = off)", _range(0.0),
+                        "on several ranks: end the job (exit 3, output marked failed) when the ranks have not "
+                        "agreed for this long; --watchdog overrides it"),
 }
 
 SECTIONS = sorted({k.split(".")[0] for k in SCHEMA})
-
-
-def to_toml(scene: dict[str, Any]) -> str:
-    """The resolved scene as nested TOML text (stored in every output file)."""
-    tree: dict[str, dict] = {}
-    for name, value in scene.items():
-        sec, key = name.split(".", 1)
-        tree.setdefault(sec, {})[key] = value
-    return tomli_w.dumps(tree)
 
 
 def describe_keys() -> str:
