@@ -178,10 +178,25 @@ def cli_env(**extra) -> dict:
     return env
 
 
+def run_limited(cmd, env=None, timeout: float = 300, cwd=None) -> subprocess.CompletedProcess:
+    """Run ``cmd`` in its own process group under a hard time limit: past it every process of the group
+    (the launcher and all its ranks) is killed and the test fails as a hang, without leaving ranks behind."""
+    import signal
+    proc = subprocess.Popen(cmd, env=env, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, err = proc.communicate()
+        pytest.fail(f"hung: {' '.join(map(str, cmd))} ran past its limit of {timeout:g} s\n"
+                    f"stderr (last 3000 characters):\n{err[-3000:]}")
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
 def run_cli(n: int, *args, writer: str = "gather", env: dict | None = None, timeout: float = 300):
-    """`parslip ARGS` on n ranks, as a user starts it; returns the finished process (text output)."""
-    return subprocess.run(cli_command(n, *args, writer=writer), env=cli_env(**(env or {})), capture_output=True,
-                          text=True, timeout=timeout)
+    """`parslip ARGS` on n ranks, as a user starts it, under a hard time limit (a hang fails the test)."""
+    return run_limited(cli_command(n, *args, writer=writer), env=cli_env(**(env or {})), timeout=timeout)
 
 
 def datasets(path) -> tuple[dict, dict]:

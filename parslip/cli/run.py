@@ -21,7 +21,7 @@ import os
 import sys
 import time
 
-from ..errors import EXIT_RUN_FAILED, RunError
+from ..errors import EXIT_RUN_FAILED, RunError, WriteError
 
 EXIT_INTERRUPTED = 130
 
@@ -59,6 +59,8 @@ def cmd_run(args, comm) -> int:
     except RunError as e:
         if rank == 0:
             print(f"parslip: run failed: {e}", file=sys.stderr)
+        if isinstance(e, WriteError):
+            _exit_now(comm, EXIT_RUN_FAILED)
         return EXIT_RUN_FAILED
     oc = result.outcome
     if not oc.complete:
@@ -69,6 +71,19 @@ def cmd_run(args, comm) -> int:
     if rank == 0 and oc.step:
         _report(result, args, log)
     return 0
+
+
+def _exit_now(comm, code: int):
+    """After a failed write HDF5 still holds a file it could not close, and its own clean-up at exit
+    crashes on it (a segfault seen with HDF5 1.14 on a full disk): end the process without that clean-up,
+    after every rank has said its line and MPI is finalised."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if comm is not None:
+        from mpi4py import MPI
+        comm.Barrier()
+        MPI.Finalize()
+    os._exit(code)
 
 
 def _report(result, args, log):

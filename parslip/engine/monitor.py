@@ -186,11 +186,18 @@ class Monitor:
             grace = max(SIGNAL_GRACE_S, 2 * self.max_gap)
             if self.watchdog_s:
                 grace = min(grace, self.watchdog_s)
+            if self.rank != 0 and self.hb is not None and now - self.hb.heard[0][0] < grace:
+                grace += 2.0                    # rank 0 still answers: let it speak for the job
             if now - self.signal_at > grace:
                 name = SIGNAL_NAMES.get(self.signum, f"signal {self.signum}")
                 self._report_self(now)
-                self._abort(f"{name} arrived while this rank (rank {self.rank}) was blocked at step {self._step()} "
-                            f"in '{self._phase}' and the ranks did not meet for {now - self.signal_at:.0f} s; a "
+                who = ""
+                if self.rank == 0 and self.hb is not None:
+                    silent = self.hb.silent(max(grace, 3 * self.hb_every))
+                    if silent:
+                        who = "; " + ", ".join(f"rank {r}" for r in silent) + " stopped answering"
+                self._abort(f"{name} arrived while rank {self.rank} was blocked at step {self._step()} in "
+                            f"'{self._phase}' and the ranks did not meet for {now - self.signal_at:.0f} s{who}; a "
                             f"checkpoint needs every rank, so none was written")
                 return
         if not self.watchdog_s or self.last_agree is None:

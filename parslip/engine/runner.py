@@ -184,6 +184,8 @@ def _run(ranks, scene, out, sets, restart, overwrite, progress, stop_after, watc
         raise ConfigError(f"--watchdog {watchdog!r}: accepted: seconds >= 0 (0 = off)")
     omega = plan.omega or ranks.decide(lambda: (lambda s: (s.omega_max, s.omega_method))(derive(sc)))
     st = derive(sc, tuple(omega))
+    if not plan.checkpoint:
+        ranks.decide(lambda: _check_room(out, st))
     sim = Simulation(st, ranks.comm, buffer_frames=sc["output.buffer_frames"])   # ConfigError alike everywhere
     run_id = plan.run_id or ranks.decide(lambda: uuid.uuid4().hex)
     if plan.checkpoint:
@@ -303,6 +305,23 @@ def _run(ranks, scene, out, sets, restart, overwrite, progress, stop_after, watc
                      f"{timings['drive_steps']} steps, {timings['drive_steps'] / max(timings['drive_s'], 1e-9):,.0f} "
                      f"steps/s")
     return outcome
+
+
+def _check_room(out: str, st) -> None:
+    """Rank 0, before a fresh run: the output file is allocated whole when it is made, so a filesystem
+    without room for it is refused now (exit 2) rather than found full at the end of the run."""
+    import shutil
+
+    from ..scene.budget import output_bytes
+    need = output_bytes(st)["total"]
+    try:
+        free = shutil.disk_usage(os.path.dirname(os.path.abspath(out))).free
+    except OSError:
+        return
+    if need > free:
+        raise ConfigError(f"--out {out!r}: the run writes about {need / 2**20:.1f} MiB but its filesystem has "
+                          f"{free / 2**20:.1f} MiB free; accepted: a path with room, or a smaller output "
+                          f"(output.snapshots, output.fields = \"interface\", output.interface_dt)")
 
 
 def writer_toml(scene: dict) -> str:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import sys
 
 import h5py
 import numpy as np
@@ -24,6 +25,7 @@ from .contract import FORCE_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, TIMING_P
 from .scenefile import to_toml
 
 VTK_LINE = 3
+_UNCLOSABLE: list = []          # files whose close failed, and their objects (see ``Output.close``)
 
 
 def git_commit() -> str:
@@ -120,12 +122,31 @@ class Output:
         # A bond to a rigid substrate has no substrate node: drawn, like a broken bond, as a point-line.
         self.bottom_gid_of_site = ((lambda q: np.full(np.shape(q), -1, np.int64)) if lat.rigid else
                                    (lambda q: lat.gid(BOTTOM, lat.bottom.rows - 1, q)))
+        self._catch_unraisable()
         if resume:
             self._resume(st, resume)
         else:
-            self._create(st, provenance or {})
-        self.flush()
+            self._write("(creating the datasets)", lambda: self._create(st, provenance or {}))
+        try:
+            self.flush()
+        except WriteError:
+            self.close(status=f"failed: cannot write {path}")
+            raise
 
+    def _catch_unraisable(self):
+        """HDF5 writes metadata when h5py objects are freed; on a full disk that fails inside a destructor,
+        where Python can only print a traceback.  While this file is open such failures are kept as this
+        rank's write error instead (one line, agreed at the next write) and nothing is printed."""
+        prev = sys.unraisablehook
+
+        def hook(u):
+            if isinstance(u.exc_value, (OSError, RuntimeError)) and "h5py" in str(u.object):
+                if self._error is None:
+                    self._error = ("(metadata)", _one_line(u.exc_value))
+                return
+            prev(u)
+        self._prev_unraisable = prev
+        sys.unraisablehook = hook
     # ------------------------------------------------------------ plumbing --
     def _open(self, path, comm, how):
         """Open for writing (``how`` "w" or "r+"); a file that cannot be opened is bad input on every rank."""
@@ -163,13 +184,14 @@ class Output:
         return ds
 
     def _write(self, what, fn):
-        """Run one write; keep the first failure instead of raising it on this rank alone."""
+        """Run one write; keep the first failure instead of raising it on this rank alone (h5py raises
+        OSError, or RuntimeError when HDF5 fails to flush its metadata)."""
         if self._error is not None:
             return
         try:
             fn()
-        except OSError as e:
-            self._error = (what, f"{e.__class__.__name__}: {e}")
+        except (OSError, RuntimeError) as e:
+            self._error = (what, _one_line(e))
 
     def _put(self, name, index, data):
         """Write my slice ``index`` (a tuple of slices) of dataset ``name``."""
@@ -194,8 +216,10 @@ class Output:
         if err:
             self._error = err
             what, text = err
-            raise WriteError(f"cannot write {self.path} ({text}, dataset /{what}); frames 0 to "
-                             f"{self.frames_safe - 1} of the interface record are in the file", path=self.path,
+            safe = (f"frames 0 to {self.frames_safe - 1} of the interface record were written before"
+                    if self.frames_safe else "no frame of the interface record was written")
+            where = f"dataset /{what}" if not what.startswith("(") else what.strip("()")
+            raise WriteError(f"cannot write {self.path} ({text}; {where}); {safe}", path=self.path,
                              frames_safe=self.frames_safe)
 
     def _create(self, st, prov):
@@ -229,7 +253,7 @@ class Output:
         a["units"] = ("internal: a = 1, node mass = 1, velocity unit " + st.material.velocity_unit +
                       "; /interface: lengths in l, time in l/c_r; VTKHDF: positions in a, "
                       "velocity in internal units, stress in rho c_r^2, step times in l/c_r")
-        g = f.create_group("interface")
+        g = self._handles["interface"] = f.create_group("interface")
         g.attrs["frame_every_steps"] = st.frame_every
         g.attrs["frames_written"] = 0
         rows = max(1, min(max(nf, 1), (1 << 16) // max(ns, 1)))
@@ -245,11 +269,14 @@ class Output:
             else:
                 ds = g.create_dataset(name, shape=(ns,), dtype=dt_)
             ds.attrs["units"] = unit
+            # Every h5py object stays referenced until the file closes: a dataset freed earlier writes its
+            # metadata in a destructor, where a full disk can only print tracebacks.
+            self._handles[f"interface/{name}"] = ds
         if self.root:
             g["x"][...] = (np.arange(ns) + 0.5) / ns    # node s stands at the middle of its spacing
         if self.sim.snapshots_total == 0 or st.scene["output.fields"] == "interface":
             return          # no snapshots asked for: no empty VTKHDF group either
-        v = f.create_group("VTKHDF")
+        v = self._handles["VTKHDF"] = f.create_group("VTKHDF")
         v.attrs["Version"] = np.array([2, 2], np.int64)
         v.attrs["Type"] = np.bytes_(b"UnstructuredGrid")
         S = self.sim.snapshots_total
@@ -258,9 +285,10 @@ class Output:
                 np.float64 if name.startswith(("Points", "PointData")) or name == "Steps/Values" else np.int64)
             if name == "Steps/Values":
                 shape = (0,)              # grows with each snapshot: VTK's reader needs len(Values) == NSteps
-            v.create_dataset(name, shape=shape, maxshape=(None,) + shape[1:], dtype=dt_,
-                             chunks=(max(1, min(max(shape[0], 1), 1 << 16)),) + shape[1:], dcpl=_early())
-        v["Steps"].attrs["NSteps"] = np.int64(0)
+            self._handles[f"VTKHDF/{name}"] = v.create_dataset(
+                name, shape=shape, maxshape=(None,) + shape[1:], dtype=dt_,
+                chunks=(max(1, min(max(shape[0], 1), 1 << 16)),) + shape[1:], dcpl=_early())
+        self._ds("VTKHDF/Steps").attrs["NSteps"] = np.int64(0)
         self._step_constants(0, S)
 
     def _step_constants(self, k0: int, k1: int):
@@ -268,24 +296,23 @@ class Output:
         arrays), written at once when the file is made or grows: a snapshot then writes its data only."""
         if not self.root or k1 <= k0:
             return
-        v = self.f["VTKHDF"]
         N, M = self.n_nodes, self.n_cells
         k = np.arange(k0, k1, dtype=np.int64)
         for name, val in (("NumberOfPoints", np.full(len(k), N)), ("NumberOfCells", np.full(len(k), M)),
                           ("NumberOfConnectivityIds", np.full(len(k), 2 * M)), ("Steps/PartOffsets", k),
                           ("Steps/NumberOfParts", np.ones(len(k), np.int64)), ("Steps/PointOffsets", k * N),
                           ("Steps/CellOffsets", k * M), ("Steps/ConnectivityIdOffsets", k * 2 * M)):
-            v[name][k0:k1] = val
+            self._ds(f"VTKHDF/{name}")[k0:k1] = val
         for name in ("velocity", "sxx", "syy", "sxy"):
-            v[f"Steps/PointDataOffsets/{name}"][k0:k1] = k * N
+            self._ds(f"VTKHDF/Steps/PointDataOffsets/{name}")[k0:k1] = k * N
         for name in ("interface", "intact"):
-            v[f"Steps/CellDataOffsets/{name}"][k0:k1] = k * M
+            self._ds(f"VTKHDF/Steps/CellDataOffsets/{name}")[k0:k1] = k * M
         # Every step's cells are lines: offsets into its connectivity, and their type (one step at a time,
         # so no array of all the steps' cells is ever held).
         offsets, types = 2 * np.arange(M + 1, dtype=np.int64), np.full(M, VTK_LINE, np.uint8)
         for j in range(k0, k1):
-            v["Offsets"][j * (M + 1):(j + 1) * (M + 1)] = offsets
-            v["Types"][j * M:(j + 1) * M] = types
+            self._ds("VTKHDF/Offsets")[j * (M + 1):(j + 1) * (M + 1)] = offsets
+            self._ds("VTKHDF/Types")[j * M:(j + 1) * M] = types
 
     def _vtk_shapes(self, S: int) -> dict:
         """Shapes of the VTKHDF datasets for S snapshots (N points, M line cells each)."""
@@ -349,7 +376,8 @@ class Output:
                     self._ds(f"interface/{name}")[k0:k0 + count] = values
             self._write("interface/time", put)
         if self.f is not None:
-            self._write("interface", lambda: self.f["interface"].attrs.__setitem__("frames_written", k0 + count))
+            self._write("interface", lambda: self._ds("interface").attrs.__setitem__("frames_written", k0 + count))
+            self._write("(flushing to disk)", self.f.flush)   # on disk now: a full disk shows here, not at the end
         self._agree_write()
         self.frames_safe = k0 + count
 
@@ -401,19 +429,19 @@ class Output:
         self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
         if self.f is not None:
             def steps():
-                v = self.f["VTKHDF"]
-                v["Steps/Values"].resize((k + 1,))
+                values = self._ds("VTKHDF/Steps/Values")
+                values.resize((k + 1,))
                 if self.root:
-                    v["Steps/Values"][k] = t
+                    values[k] = t
                 # NSteps must never be below len(Values): VTK's reader corrupts memory otherwise.
-                v["Steps"].attrs["NSteps"] = np.int64(k + 1)
+                self._ds("VTKHDF/Steps").attrs["NSteps"] = np.int64(k + 1)
             self._write("VTKHDF/Steps", steps)
         self._agree_write()
 
     def flush(self):
         """Everything written so far onto disk (collective): done at start-up and before each checkpoint."""
         if self.f is not None:
-            self._write("(flush)", self.f.flush)
+            self._write("(flushing to disk)", self.f.flush)
         self._agree_write()
 
     def set_attrs(self, attrs: dict):
@@ -441,21 +469,40 @@ class Output:
             return False
 
     def close(self, status: str = "complete"):
-        """Set the status and close (collective).  After a failed write, close as best it can: the status
-        line and what is already on disk matter more than a second error."""
+        """Set the status and close (collective).  A close that fails (HDF5 writes what it still holds)
+        is a WriteError on every rank; after an earlier failure it closes as best it can, quietly."""
+        err = None
         if self.f is not None:
             f, self.f = self.f, None
-            self._handles = {}
+            # Close the file first: it closes every object in it, so the handles freed next write nothing.
             try:
                 f.attrs["status"] = status
                 f.close()
-            except Exception:                           # noqa: BLE001
-                if self._error is None:
-                    raise
-                try:
-                    f.close()
-                except Exception:                       # noqa: BLE001
-                    pass
+            except (OSError, RuntimeError) as e:
+                err = _one_line(e)
+                # Never close twice, and never free the objects of a file whose close failed: HDF5 (1.14)
+                # crashes on either.  They are kept until the process ends (``cli.run`` ends it at once).
+                _UNCLOSABLE.append((f, self._handles))
+            self._handles = {}
+        if getattr(self, "_prev_unraisable", None) is not None:
+            if err is None:
+                import gc
+                gc.collect()                            # free what is left while failures are still caught
+            sys.unraisablehook, self._prev_unraisable = self._prev_unraisable, None
+        if err and self._error is None:
+            self._error = ("(closing the file)", err)
+        self._agree_write()
+
+
+def _one_line(e: BaseException) -> str:
+    """An h5py/HDF5 error as one line: HDF5's multi-line "file write failed" text becomes its errno text."""
+    import re
+    text = str(e)
+    m = re.search(r"error message = '([^']*)'", text)
+    head = text.split("(")[0].strip() if "(" in text else text.splitlines()[0] if text else ""
+    if m:
+        return f"{e.__class__.__name__}: {head} ({m.group(1)})"
+    return f"{e.__class__.__name__}: {' '.join(text.split())}"
 
 
 def _ordered_sum(values: np.ndarray) -> np.ndarray:

@@ -20,16 +20,9 @@ from numba import njit
 
 from ..model.lattice import BOTTOM
 from . import mpi
-from .exchange import COMPLETE, POST, PROGRESS, REDUCE
+from .exchange import COMPLETE, POST, PROGRESS, REDUCE, SEGMENT, SITES, Plan
 
 TAG = 7
-# A row segment that travels (array row and columns, with the pad), and a run of interface sites.
-SEGMENT = np.dtype([("block", np.int64), ("row", np.int64), ("j0", np.int64), ("n", np.int64)])
-SITES = np.dtype([("j0", np.int64), ("n", np.int64)])
-Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "
-                          "req status handles rflags")
-
-
 def build_plan(layout, dtype, comm=None) -> Plan:
     """Index arrays and buffers of ``layout``'s exchange, in local columns; MPI handles from ``comm``
     (without one, a plan to inspect, e.g. its buffer sizes, not to run)."""

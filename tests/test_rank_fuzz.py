@@ -1,0 +1,107 @@
+"""Rank-count fuzz: the shipped scenes' physics, small, on 1 to 6 ranks, past many full frame buffers,
+a checkpoint and a restart on another rank count; every /interface dataset bitwise the 1-rank run's.
+
+The lattice is SMALL with a substrate that overhangs the block by 33 columns each side, so the slabs
+split the interface sites unevenly (6/12/6 on 3 ranks, 3/9/9/3 on 4, 1/7/8/7/1 on 5) and, on 6 ranks,
+the outer ranks own substrate columns only (no interface site at all).  At v0/c_r = 0.05 the block
+slides 7 a in 6 l/c_r, more than the 6 columns of each inner slab on 6 ranks and the 1 to 3 of the
+outer ones on 4 and 5: halos reach across slabs.  The frame buffer holds 7 frames of the 148 a run
+records, so every run flushes about twenty times; before the fix of the collective rule, ranks with
+fewer sites filled their (then larger) buffers at other frames and 3+ ranks hung.
+
+Every run has a hard time limit (``helpers.run_limited``): a hang fails the test, it does not stall CI.
+Rank counts above 2 are oversubscribed on a 2-core machine; the collective (mpio) writer runs on 2 to 4
+ranks, the gathering writer on 1, 5 and 6 (and both on restarts).
+"""
+import numpy as np
+import pytest
+
+from helpers import SMALL, datasets, require, run_cli, scene, small_toml
+from parslip.parallel.layout import column_cost, owned_site_counts, partition
+from parslip.scene.derive import derive
+
+FUZZ = {**SMALL, "lattice.bottom_cols": 90, "drive.v0": 0.05, "drive.duration": 6.0, "output.buffer_frames": 7,
+        "output.snapshots": 2}
+LIMIT_S = 150                # per run: a hung run fails here at the latest
+WATCHDOG = ("--watchdog", "30")   # and its own watchdog ends it sooner, naming where the ranks wait
+# scene -> [(ranks, writer)]: 1 to 6 ranks over the three scenes, both writers.
+RUNS = {"push": [(2, "mpio"), (5, "gather"), (6, "gather")],
+        "pull": [(3, "gather"), (4, "mpio"), (6, "gather")],
+        "shear": [(2, "gather"), (3, "mpio"), (4, "gather"), (5, "gather")]}
+# scene -> (ranks, writer) of the first half, then (ranks, writer) of the restart.
+RESTARTS = {"push": ((3, "gather"), (6, "gather")), "pull": ((4, "gather"), (2, "gather")),
+            "shear": ((4, "mpio"), (2, "mpio"))}
+
+
+def interface(path) -> dict:
+    data, attrs = datasets(path)
+    assert attrs["status"] == "complete", attrs["status"]
+    return {k: v for k, v in data.items() if k.startswith("interface/")}
+
+
+def assert_bitwise(got, ref, what):
+    assert got.keys() == ref.keys(), what
+    for name in ref:
+        assert got[name].dtype == ref[name].dtype and got[name].shape == ref[name].shape, (what, name)
+        assert got[name].tobytes() == ref[name].tobytes(), (what, name)
+
+
+def test_the_fuzz_covers_what_it_claims():
+    """The decompositions the fuzz runs on: uneven site splits, ranks with no interface site, slabs
+    narrower than the slip the runs reach, and a frame buffer far smaller than the frames."""
+    st = derive(scene(**FUZZ))
+    lat = st.lattice
+    splits = {n: owned_site_counts(lat, partition(column_cost(lat), n)) for n in range(2, 7)}
+    assert all(len(set(splits[n].tolist())) > 1 for n in (3, 4, 5, 6))             # uneven
+    assert (splits[6] == 0).sum() == 2                                           # substrate-only slabs
+    b6 = partition(column_cost(lat), 6)
+    t0, t1 = lat.top.col0, lat.top.col0 + lat.top.cols
+    inner = [min(b6[i + 1], t1) - max(b6[i], t0) for i in range(6) if min(b6[i + 1], t1) > max(b6[i], t0)]
+    assert max(inner) < FUZZ["drive.v0"] * FUZZ["drive.duration"] * st.l       # the drive moves the block 7.2 a
+    assert st.n_frames > 15 * FUZZ["output.buffer_frames"]
+    used = sorted({n for runs in RUNS.values() for n, _ in runs} | {n for a, b in RESTARTS.values() for n in (a[0], b[0])})
+    assert used == [2, 3, 4, 5, 6]
+    assert {w for runs in RUNS.values() for _, w in runs} == {"gather", "mpio"}
+
+
+@pytest.fixture(scope="module", params=sorted(RUNS))
+def reference(request, tmp_path_factory):
+    """The scene on one rank, its /interface datasets, and its scene file."""
+    mode = request.param
+    require("gather")
+    d = tmp_path_factory.mktemp(f"fuzz_{mode}")
+    sc = d / f"{mode}.toml"
+    sc.write_text(small_toml(**{**FUZZ, "drive.mode": mode}))
+    out = d / "r1.vtkhdf"
+    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", timeout=LIMIT_S)
+    assert p.returncode == 0, p.stderr
+    ref = interface(out)
+    assert (ref["interface/intact"] == 0).any() and np.abs(ref["interface/ux"]).max() * 24 > 6   # slid > 6 a
+    return mode, sc, d, ref
+
+
+def test_any_rank_count_writes_the_one_rank_interface(reference):
+    mode, sc, d, ref = reference
+    for n, writer in RUNS[mode]:
+        require(writer)
+        out = d / f"{writer}{n}.vtkhdf"
+        p = run_cli(n, "run", sc, "--out", out, "--no-png", "--quiet", *WATCHDOG, writer=writer, timeout=LIMIT_S)
+        assert p.returncode == 0, f"{mode} on {n} ranks ({writer}):\n{p.stderr[-3000:]}"
+        assert_bitwise(interface(out), ref, f"{mode} on {n} ranks ({writer})")
+
+
+def test_checkpoint_on_one_rank_count_restart_on_another(reference):
+    """The first half (3 of the 6 l/c_r) ends with a checkpoint; a restart on another rank count extends
+    it to 6 l/c_r: the file then holds the 1-rank run's interface, bit for bit."""
+    mode, sc, d, ref = reference
+    (n1, w1), (n2, w2) = RESTARTS[mode]
+    require(w1)
+    require(w2)
+    out = d / f"restart_{n1}_{n2}.vtkhdf"
+    p = run_cli(n1, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=3.0",
+                "--set", "checkpoint.every=1.0", *WATCHDOG, writer=w1, timeout=LIMIT_S)
+    assert p.returncode == 0, p.stderr[-3000:]
+    p = run_cli(n2, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", f"{out}.ckpt.h5",
+                "--set", "checkpoint.every=1.0", *WATCHDOG, writer=w2, timeout=LIMIT_S)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert_bitwise(interface(out), ref, f"{mode}: {n1} ranks ({w1}), then {n2} ranks ({w2})")
