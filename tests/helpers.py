@@ -207,3 +207,30 @@ def datasets(path) -> tuple[dict, dict]:
         f.visititems(lambda name, obj: out.__setitem__(name, obj[...]) if isinstance(obj, h5py.Dataset) else None)
         attrs = dict(f.attrs)
     return out, attrs
+
+
+def ranks_below(launcher_pid) -> list[int]:
+    """The parslip processes below the launcher (the ranks, not its proxies).  Found by
+    parent links: Debian's Hydra puts each proxy and rank in a session of its own."""
+    parent = {}
+    for d in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                parent[int(d)] = int(f.read().rsplit(")", 1)[1].split()[1])
+        except OSError:
+            pass
+    below, todo = [], [launcher_pid]
+    while todo:
+        pid = todo.pop()
+        kids = [p for p, pp in parent.items() if pp == pid]
+        below += kids
+        todo += kids
+    ranks = []
+    for pid in below:
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                if b"\0-m\0parslip\0" in f.read():
+                    ranks.append(pid)
+        except OSError:
+            pass
+    return ranks

@@ -18,7 +18,7 @@ import time
 import h5py
 import pytest
 
-from helpers import WRITERS, cli_command, cli_env, run_cli, small_toml
+from helpers import WRITERS, cli_command, cli_env, ranks_below, run_cli, small_toml
 
 # Long enough that the signal or the fault lands inside the time loop (a million
 # steps, several seconds on 2 ranks).
@@ -58,39 +58,12 @@ def _wait_for_line(proc, fragment, timeout):
     return seen
 
 
-def _ranks(launcher_pid):
-    """The parslip processes below the launcher (the ranks, not its proxies).  Found by
-    parent links: Debian's Hydra puts each proxy and rank in a session of its own."""
-    parent = {}
-    for d in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            with open(f"/proc/{d}/stat") as f:
-                parent[int(d)] = int(f.read().rsplit(")", 1)[1].split()[1])
-        except OSError:
-            pass
-    below, todo = [], [launcher_pid]
-    while todo:
-        pid = todo.pop()
-        kids = [p for p, pp in parent.items() if pp == pid]
-        below += kids
-        todo += kids
-    ranks = []
-    for pid in below:
-        try:
-            with open(f"/proc/{pid}/cmdline", "rb") as f:
-                if b"\0-m\0parslip\0" in f.read():
-                    ranks.append(pid)
-        except OSError:
-            pass
-    return ranks
-
-
 def _ctrl_c(proc):
     os.killpg(proc.pid, signal.SIGINT)          # what a terminal does: the launcher's process group
 
 
 def _slurm_usr1(proc):
-    ranks = _ranks(proc.pid)
+    ranks = ranks_below(proc.pid)
     assert len(ranks) == 2, ranks
     for pid in ranks:                            # what --signal=USR1@300 does: the step's tasks only
         os.kill(pid, signal.SIGUSR1)

@@ -224,7 +224,7 @@ class Monitor:
 
     def _fire_root(self, now, silence):
         from ..parallel.heartbeat import REPORT
-        quiet = max(10.0, 3 * self.hb_every)
+        quiet = min(max(5 * self.hb_every, 3.0), self.watchdog_s / 2)      # silent: no beat for this long
         if self.hb is not None:
             self.hb.send(self._beat(), tag=REPORT)         # every rank that can still speak logs its state
         self._report_self(now)

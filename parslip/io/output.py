@@ -208,7 +208,10 @@ class Output:
             self._write(name, put)
 
     def _agree_write(self):
-        """Collective: raise ``WriteError`` on every rank if a write failed on any."""
+        """Collective: raise ``WriteError`` on every rank if a write failed on any.
+
+        Every call that is collective under mpio (attributes, resize, flush, close) comes right after an
+        agreement, so a rank whose write failed never skips one that the others enter."""
         err = self._error
         if self.size > 1:
             errs = [e for e in self.comm.allgather(err) if e]
@@ -375,6 +378,7 @@ class Output:
                 for name, values in sums.items():
                     self._ds(f"interface/{name}")[k0:k0 + count] = values
             self._write("interface/time", put)
+        self._agree_write()            # before the collective calls below: no rank may skip one alone
         if self.f is not None:
             self._write("interface", lambda: self._ds("interface").attrs.__setitem__("frames_written", k0 + count))
             self._write("(flushing to disk)", self.f.flush)   # on disk now: a full disk shows here, not at the end
@@ -427,6 +431,7 @@ class Output:
         self._put("VTKHDF/Connectivity", (slice(2 * i0, 2 * (i0 + ns)),), iface.ravel())
         self._put("VTKHDF/CellData/interface", (slice(i0, i0 + ns),), np.ones(ns, np.uint8))
         self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
+        self._agree_write()            # before the collective resize and attribute below
         if self.f is not None:
             def steps():
                 values = self._ds("VTKHDF/Steps/Values")
