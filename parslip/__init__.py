@@ -9,7 +9,7 @@ The public facade, above every layer of the package:
 
 ``import parslip`` loads neither numpy nor h5py nor MPI: each name is imported on first use.
 """
-__version__ = "0.1.0"
+from .version import __version__  # noqa: E402,F401
 
 __all__ = ["run", "open", "Run", "ConfigError", "RunError", "__version__"]
 

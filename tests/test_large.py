@@ -13,7 +13,7 @@ import os
 import numpy as np
 import pytest
 
-from parslip.bench import scaling
+from parslip.studies.bench import scaling
 from parslip.scene.load import load
 from parslip.model.lattice import BOTTOM, TOP, Lattice
 from parslip.parallel.layout import build_layout, interface_reach

@@ -26,7 +26,7 @@ FRONT_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:brown")
 SLIP_POINTS = (0.0, 0.35, 0.98)           # x/l of the slip records (Fig. 10, appendix C)
 
 
-def _plt():
+def pyplot():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -35,7 +35,7 @@ def _plt():
 
 def save(fig, out_dir: str, name: str) -> list[str]:
     """Write ``name``.png and ``name``.pdf in ``out_dir``; close the figure; return both paths."""
-    plt = _plt()
+    plt = pyplot()
     os.makedirs(out_dir, exist_ok=True)
     paths = [os.path.join(out_dir, f"{name}.{ext}") for ext in ("png", "pdf")]
     fig.tight_layout()
@@ -53,20 +53,20 @@ def _title(run) -> str:
     return f"{os.path.basename(run.path)}: {run.mode}, v0/c_r = {run.v0:g}"
 
 
-def _legend(ax, size: int) -> None:
+def legend(ax, size: int) -> None:
     """A legend when something is labelled (a run without fronts has nothing to list)."""
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=size)
 
 
-def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, legend: bool = True) -> list[str]:
+def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, with_legend: bool = True) -> list[str]:
     """Label a column of axes (x label on the last), legend and run title on the first, then save."""
     axes = list(np.atleast_1d(axes))
     for ax, yl in zip(axes, ylabels):
         ax.set_ylabel(yl)
     axes[-1].set_xlabel(xlabel)
-    if legend:
-        _legend(axes[0], 7)
+    if with_legend:
+        legend(axes[0], 7)
     axes[0].set_title(_title(run), fontsize=8)
     return save(fig, out_dir, name)
 
@@ -93,7 +93,7 @@ def spacetime_picture(iface: dict, png: str, title: str = "") -> bool:
     for a free block, which has no interface."""
     if len(iface["x"]) == 0:
         return False
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 6))
     draw_spacetime(ax, iface)
     ax.set_title((f"{title}\n" if title else "") + "interface bonds: intact (yellow), broken (white)", fontsize=9)
@@ -120,7 +120,7 @@ def zoom_window(run, share: float = 0.1, pad: float = 0.5, after: float = 2.0):
 def fig_spacetime(run, out_dir: str) -> list[str]:
     """Space-time diagram with each detected front's tip drawn over it and a red arrow for its direction;
     beside it the same zoomed in time on the fronts when they fill little of the record (``zoom_window``)."""
-    plt = _plt()
+    plt = pyplot()
     window = zoom_window(run)
     fig, axes = plt.subplots(1, 2 if window else 1, figsize=(9 if window else 5, 6), squeeze=False)
     for ax, lim in zip(axes[0], (None, window)):
@@ -141,7 +141,7 @@ def fig_spacetime(run, out_dir: str) -> list[str]:
 
 def fig_front_speed(run, out_dir: str, n: int = 4) -> list[str]:
     """Local tip speed v/c_r (signed) against x_tip/l for the first ``n`` fronts (Figs. 2c, 4c, 6c)."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 3.5))
     for i, f in enumerate(run.fronts()[:n]):
         ax.plot(f.tip["x"], f.tip["v"], color=colour(i), label=f"{i + 1}: {f.kind}, mean {f.mean_speed:.3g}")
@@ -175,7 +175,7 @@ def stress_times(run, n: int = 4) -> list[float]:
 def fig_interface_stress(run, out_dir: str, times: list[float] | None = None) -> list[str]:
     """sigma_xy and sigma_yy along the interface against x - x_tip^1 (the leading tip) at ``times``
     (Figs. 3b-c, 5b-c, 7b-c); dashed lines mark the other fronts' tips at the first of them."""
-    plt = _plt()
+    plt = pyplot()
     it, fr = run.interface, run.fronts()
     times = stress_times(run) if times is None else times
     fig, axes = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
@@ -246,7 +246,7 @@ def mode2_table(run, n_fronts: int = 3) -> list[dict]:
 
 def fig_mode2(run, out_dir: str, n_fronts: int = 3) -> tuple[list[str], list[dict]]:
     """sigma_xy ahead of the tip with the fitted K_II / sqrt(2 pi (xi + x_p)) dashed (appendix B)."""
-    plt = _plt()
+    plt = pyplot()
     rows = mode2_table(run, n_fronts)
     fr = run.fronts()
     fig, ax = plt.subplots(figsize=(5, 3.5))
@@ -261,7 +261,7 @@ def fig_mode2(run, out_dir: str, n_fronts: int = 3) -> tuple[list[str], list[dic
             ax.plot(xx, r["K_II"] / np.sqrt(2 * np.pi * (xx + r["x_p"])), "--", color=c, lw=1)
     ax.set_xlabel("distance ahead of the tip / l")
     ax.set_ylabel("sigma_xy / rho c_r^2")
-    _legend(ax, 6)
+    legend(ax, 6)
     ax.set_title(_title(run) + "\nK_II in rho c_r^2 l^1/2, x_p in l", fontsize=8)
     paths = save(fig, out_dir, "mode2_fit")
     csv = os.path.join(out_dir, "mode2_fit.csv")
@@ -291,7 +291,7 @@ def passages(run, s: int) -> list[tuple[int, float]]:
 
 def fig_slip_records(run, out_dir: str, points=SLIP_POINTS) -> list[str]:
     """u(t) at three interface points, with a marker where each front passes (Fig. 10)."""
-    plt = _plt()
+    plt = pyplot()
     ux = run.interface["ux"]
     fig, ax = plt.subplots(figsize=(5, 3.5))
     for x, ls in zip(points, ("-", "--", ":")):
@@ -317,7 +317,7 @@ def slip_behind_tips(run, front_index: int):
 
 def fig_slip_behind_tips(run, out_dir: str, n: int = 4) -> list[str]:
     """Delta u and Delta v behind the tips of the first ``n`` fronts against x_tip (Fig. 9)."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(2, 1, figsize=(5, 5), sharex=True)
     for i in range(min(n, len(run.fronts()))):
         x, du, dv = slip_behind_tips(run, i)
@@ -334,19 +334,19 @@ def slip_velocity(run, x: float) -> tuple[np.ndarray, np.ndarray]:
 
 def fig_slip_velocity(run, out_dir: str, points=SLIP_POINTS) -> list[str]:
     """The slip velocity u-dot at x/l = 0, 0.35 and 0.98 (appendix C)."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(len(points), 1, figsize=(5, 6), sharex=True)
     for ax, x in zip(axes, points):
         t, v = slip_velocity(run, x)
         ax.plot(t, v, color="tab:orange", lw=0.8)
         ax.set_ylabel(f"u-dot / c_r\nx/l = {x:g}", fontsize=8)
         ax.ticklabel_format(axis="y", useOffset=False)
-    return _finish(fig, axes, run, out_dir, "slip_velocity", "t c_r / l", (), legend=False)
+    return _finish(fig, axes, run, out_dir, "slip_velocity", "t c_r / l", (), with_legend=False)
 
 
 def fig_pulse_width(run, out_dir: str, n: int = 4) -> list[str]:
     """Width of the broken zone behind the tip, in lattice spacings, against x_tip (appendix A)."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 3.5))
     for i, f in enumerate(run.fronts()[:n]):
         ax.plot(f.tip["x"], f.tip["w"], color=colour(i), drawstyle="steps-mid", label=f"front {i + 1} ({f.kind})")
@@ -437,7 +437,7 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
     compares lies flat under the final run-up to c_r.  ``auto``: v0 when the runs' v0 differ.  Returns the paths
     and rows of (run, mode, v0, front, mean speed in c_r, mean speed / v0).
     """
-    plt = _plt()
+    plt = pyplot()
     if scale == "auto":
         scale = "v0" if len({r.v0 for r in runs}) > 1 else "c_r"
     fig, axes = plt.subplots(1, n, figsize=(4 * n, 3.5), squeeze=False)
@@ -466,5 +466,5 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
         ax.set_title(f"front {i + 1}", fontsize=9)
         ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
         ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")
-        _legend(ax, 6)
+        legend(ax, 6)
     return save(fig, out_dir, name), rows

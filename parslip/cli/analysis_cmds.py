@@ -181,9 +181,9 @@ def _out_dir(path: str) -> None:
 
 
 def cmd_accuracy(args) -> int:
-    from ..analysis import accuracy
+    from ..studies import accuracy
     from ..errors import ConfigError
-    from ..scene.load import load_scene_file, parse_set, resolve
+    from ..scene.load import load
     from ..engine.progress import setup_logging
 
     for name in args.knob or ():
@@ -191,7 +191,7 @@ def cmd_accuracy(args) -> int:
             raise ConfigError(f"--knob {name!r}: unknown knob; accepted: {', '.join(KNOB_NAMES)}")
     if args.duration is not None:
         _positive("duration", args.duration, "accepted: a time > 0 in l/c_r")
-    resolve(load_scene_file(args.scene), [parse_set(s) for s in args.set])     # bad scene: one line, exit 2
+    load(args.scene, args.set)          # bad scene: one line, exit 2
     _out_dir(args.out)
     setup_logging(0, 1)
     if args.redraw:

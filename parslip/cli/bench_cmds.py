@@ -1,4 +1,4 @@
-"""`parslip bench`: the benchmark suite (``parslip.bench.suite``) from the command line."""
+"""`parslip bench`: the benchmark suite (``parslip.studies.bench.suite``) from the command line."""
 from __future__ import annotations
 
 import json
@@ -19,14 +19,14 @@ def register(sub) -> None:
     b.add_argument("--scaling", action="store_true",
                    help="instead: time per step at --sizes on --ranks, fit t_step = a N + b H + c (rank counts "
                         "above the machine's cores kept out of the fit), predict l = 2000 on 64 ranks "
-                        "(parslip.bench.scaling)")
+                        "(parslip.studies.bench.scaling)")
     b.set_defaults(func=cmd_bench)
 
 
 def cmd_bench(args) -> int:
     import sys
 
-    from ..bench import suite
+    from ..studies.bench import suite
     if args.scaling:
         return _scaling(args)
     args.ranks = args.ranks or [1, 2]
@@ -47,7 +47,7 @@ def _scaling(args) -> int:
     import os
     import sys
 
-    from ..bench import scaling
+    from ..studies.bench import scaling
     ranks = args.ranks or [1, 2, 3]
     pts = scaling.measure(args.sizes, ranks, seconds=2.0 if args.quick else args.seconds, path=args.json,
                           log=lambda m: print(m, file=sys.stderr, flush=True))

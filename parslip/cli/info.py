@@ -13,7 +13,7 @@ from __future__ import annotations
 from ..errors import ConfigError
 from ..scene import advice, budget, presets
 from ..scene.limits import closing_load
-from ..scene.load import load_scene_file, parse_set, resolve
+from ..scene.load import load
 
 LABEL = 17
 
@@ -130,7 +130,7 @@ def _how(method: str) -> str:
 
 def cmd_info(args) -> int:
     from ..scene.derive import derive
-    scene = resolve(load_scene_file(args.scene), [parse_set(x) for x in args.set])
+    scene = load(args.scene, args.set)
     st = derive(scene)
     ranks = args.ranks
     if not 1 <= ranks <= st.max_ranks():

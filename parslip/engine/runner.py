@@ -31,7 +31,8 @@ import traceback
 import uuid
 from dataclasses import dataclass, field
 
-from .. import __version__, hooks
+from .. import hooks
+from ..version import __version__
 from ..errors import ConfigError, RunError, WriteError
 
 ABORT_GRACE_S = 1.0      # s: time for the launcher to forward a failing rank's traceback before MPI_Abort

@@ -18,7 +18,8 @@ import sys
 import h5py
 import numpy as np
 
-from .. import __version__, hooks
+from .. import hooks
+from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
 from .contract import FORCE_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, TIMING_PREFIX

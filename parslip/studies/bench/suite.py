@@ -31,7 +31,7 @@ import subprocess
 import sys
 import time
 
-from ..parallel.launcher import python_command
+from ...parallel.launcher import python_command
 
 # Bytes a node update moves to and from memory beyond the caches: u(t) read, u(t-dt) read and u(t+dt)
 # written in its place, x and y each (neighbours come from cache): 6 values.
@@ -48,20 +48,20 @@ def _run_json(cmd: list[str], timeout: float = 900) -> dict:
 
 def stream(ranks: int) -> float:
     """Aggregate triad bandwidth (GB/s) of ``ranks`` processes running at once."""
-    procs = [subprocess.Popen([sys.executable, "-m", "parslip.bench.stream"], stdout=subprocess.PIPE, text=True)
+    procs = [subprocess.Popen([sys.executable, "-m", "parslip.studies.bench.stream"], stdout=subprocess.PIPE, text=True)
              for _ in range(ranks)]
     return sum(json.loads(p.communicate()[0].strip().splitlines()[-1])["triad_gbs"] for p in procs)
 
 
 def case(l: int, ranks: int, precision: str, seconds: float, mode: str = "shear") -> dict:
-    return _run_json(python_command("parslip.bench.case", "--l", l, "--mode", mode, "--precision", precision,
+    return _run_json(python_command("parslip.studies.bench.case", "--l", l, "--mode", mode, "--precision", precision,
                                     "--seconds", seconds, ranks=ranks))
 
 
 def baseline(l: int, steps: int) -> float:
     """Node-updates/s of the vectorised NumPy step at contact length l (one process)."""
-    code = ("import json; from parslip.bench.case import scene_at; from parslip.scene.derive import derive; "
-            "from parslip.bench.numpy_step import node_updates_per_s; "
+    code = ("import json; from parslip.studies.bench.case import scene_at; from parslip.scene.derive import derive; "
+            "from parslip.studies.bench.numpy_step import node_updates_per_s; "
             f"print(json.dumps({{'ups': node_updates_per_s(derive(scene_at({l}, 'shear', 'float64')), {steps})}}))")
     return _run_json([sys.executable, "-c", code])["ups"]
 
@@ -84,8 +84,8 @@ def time_to_result(scene: str, ranks: int, repeats: int = 3) -> float:
 
 
 def predicted_bytes(l: int, ranks: int, precision: str) -> int:
-    from ..scene.memory import predict
-    from ..scene.derive import derive
+    from ...scene.memory import predict
+    from ...scene.derive import derive
     from .case import scene_at
     return max(predict(derive(scene_at(l, "shear", precision)), ranks)["per_rank"])
 

@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from ..engine.reference import Simulation as Reference
-from ..model.lattice import DIRECTIONS, DRIVEN, FIXED
+from ...engine.reference import Simulation as Reference
+from ...model.lattice import DIRECTIONS, DRIVEN, FIXED
 
 
 class NumpyStep:

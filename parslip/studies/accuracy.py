@@ -30,7 +30,7 @@ from typing import Callable
 
 import numpy as np
 
-from .fronts import first_break
+from ..analysis.fronts import first_break
 
 log = logging.getLogger("parslip")
 
@@ -70,7 +70,7 @@ def metrics(test, ref) -> dict:
     spacetime       fraction of the intact-bond map that disagrees (``spacetime_disagreement``)
     Missing quantities (no break, too few fronts) are NaN.
     """
-    from .paper import interval
+    from ..analysis.paper import interval
     tb_t, xb_t = first_break(test.interface)
     tb_r, xb_r = first_break(ref.interface)
     out = {"first_break_t": math.nan, "first_break_x": math.nan}
@@ -160,9 +160,9 @@ class RunResult:
     code: int                   # exit code of `parslip run`
     wall: float                 # s, the subprocess's wall clock
     error: str = ""             # last line of stderr when it failed
-    solver: float = math.nan    # s, the time stepping alone, from the run's "done in ... s" log line
-    drive: float = math.nan     # s, the drive phase alone, from the run's "drive phase ... s" log line
-    drive_cpu: float = math.nan  # s, CPU time of the drive phase (the same line): robust to other jobs on the cores
+    solver: float = math.nan    # s, the time stepping alone (the run file's timing_loop_s)
+    drive: float = math.nan     # s, the drive phase alone (timing_drive_s)
+    drive_cpu: float = math.nan  # s, CPU time of the drive phase (timing_drive_cpu_s): robust to other jobs
 
     @property
     def unavailable(self) -> bool:
@@ -194,23 +194,21 @@ def _run_once(scene: str, out: str, sets: dict, base_sets=()) -> RunResult:
     p = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.monotonic() - t0
     err = p.stderr.strip().splitlines()[-1] if p.returncode and p.stderr.strip() else ""
-    return RunResult(out, p.returncode, wall, err, *log_times(p.stderr))
+    return RunResult(out, p.returncode, wall, err, *(file_times(out) if p.returncode == 0 else
+                                                      (math.nan, math.nan, math.nan)))
 
 
-def log_times(log_text: str) -> tuple[float, float, float]:
-    """(time stepping, drive phase, drive-phase CPU) in s from a run's log: its "done in T s" and
-    "drive phase D s (C s CPU)" lines.
+def file_times(path: str) -> tuple[float, float, float]:
+    """(time stepping, drive phase, drive-phase CPU) in s, from the run file's timings (``io.contract``).
 
-    T is the whole time loop (compilation and settling included); D runs from
-    the drive's first step to the end, so it leaves out start-up, the kernels'
-    compilation and the load ramp and settling; C is the CPU time over D
-    (rank 0's), which other jobs on the same cores inflate far less than D.
-    NaN where a line is missing.
+    The time stepping runs from the first step to the end (settling included, compilation not); the
+    drive phase from the drive's first step to the end, so it leaves out start-up, compilation, the load
+    ramp and settling; its CPU time (rank 0's) is what other jobs on the same cores inflate far less.
+    NaN where a file holds no timing.
     """
-    m = re.search(r"done in ([0-9.]+) s", log_text)
-    d = re.search(r"drive phase ([0-9.]+) s \(([0-9.]+) s CPU\)", log_text)
-    return ((float(m.group(1)) if m else math.nan), *((float(d.group(1)), float(d.group(2))) if d
-                                                        else (math.nan, math.nan)))
+    from ..io.contract import read_timings
+    t = read_timings(path)
+    return t.get("loop_s", math.nan), t.get("drive_s", math.nan), t.get("drive_cpu_s", math.nan)
 
 
 def _toml(v) -> str:
@@ -238,21 +236,20 @@ def study(scene: str, out_dir: str, knobs=None, quick: bool = False, duration: f
     with a ``limit`` adds rows of its other settings measured against it.
     """
     from ..errors import ConfigError
-    from ..scene.load import load_scene_file, parse_set, resolve
-    from .results import open as open_run
+    from ..scene.load import load, overrides
+    from ..analysis.results import open as open_run
 
-    raw = load_scene_file(scene)
-    base = resolve(raw, [parse_set(s) for s in sets])
+    base = load(scene, sets)
     dur = duration or DURATION.get(base["drive.mode"], base["drive.duration"])
     fine = next(k for k in KNOBS if k.name == "cadence").reference.sets(base)
-    base_over = {**fine, **dict(parse_set(s) for s in sets), "drive.duration": float(dur), "output.snapshots": 0}
+    base_over = {**fine, **dict(overrides(sets)), "drive.duration": float(dur), "output.snapshots": 0}
     base_sets = [f"{k}={_toml(v)}" for k, v in base_over.items()]
     os.makedirs(out_dir, exist_ok=True)
     done: dict[tuple, RunResult] = {}
 
     def run(label: str, over: dict) -> RunResult:
         try:                            # the resolved scene: settings that spell the same scene share a run
-            key = tuple(sorted(resolve(raw, list({**base_over, **over}.items())).items()))
+            key = tuple(sorted(load(scene, {**base_over, **over}).items()))
         except ConfigError:
             key = tuple(sorted(over.items()))
         if key not in done:
@@ -294,7 +291,7 @@ def _against_limit(knob: Knob, rows: list[dict], results: dict) -> list[dict]:
     """Every other setting of ``knob`` measured against its ``limit`` setting, from the runs already made
     (``results``: label -> RunResult): how far each is from the limit, e.g. an elastic substrate of
     growing k_n from the rigid one.  Rows carry ``against`` = the limit's label."""
-    from .results import open as open_run
+    from ..analysis.results import open as open_run
     mine = {r["setting"]: r for r in rows if r["knob"] == knob.name and r["against"] == knob.reference.label}
     if not knob.limit or mine.get(knob.limit, {}).get("status") != "ok":
         return []
@@ -373,8 +370,8 @@ def pareto_png(rows: list[dict], out_dir: str, title: str = "") -> list[str]:
 
     Each knob's reference is drawn hollow at the floor, unlabelled (its error is zero by definition); rows measured
     against a knob's limit instead of its reference are left out."""
-    from .figures import _legend, _plt, save
-    plt = _plt()
+    from ..analysis.figures import legend, pyplot, save
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(PARETO), figsize=(4.2 * len(PARETO), 3.6))
     knobs = list(dict.fromkeys(r["knob"] for r in rows))
     for ax, m in zip(axes, PARETO):
@@ -394,7 +391,7 @@ def pareto_png(rows: list[dict], out_dir: str, title: str = "") -> list[str]:
         ax.set_yscale("log")
         ax.set_xlabel("drive-phase CPU time / s")
         ax.set_ylabel(f"{m} error ({UNITS[m]}; 0 at {FLOOR:g})")
-        _legend(ax, 6)
+        legend(ax, 6)
     fig.suptitle((title + ": " if title else "") + "error against run time (hollow: each knob's reference)",
                  fontsize=9)
     return save(fig, out_dir, "accuracy_pareto")

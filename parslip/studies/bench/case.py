@@ -1,6 +1,6 @@
 """One benchmark case: a scene scaled to contact length l, run on the ranks of this MPI job.
 
-    mpiexec -n R python -m parslip.bench.case --l 500 --mode shear --precision float64 --seconds 4
+    mpiexec -n R python -m parslip.studies.bench.case --l 500 --mode shear --precision float64 --seconds 4
 
 Measures, in this order: imports, deriving the scene (omega_max), building
 the rank's state, the first compiled call (loading the compiled loop from
@@ -24,11 +24,11 @@ import tempfile  # noqa: E402
 
 from mpi4py import MPI  # noqa: E402
 
-from ..engine import loop as L  # noqa: E402
-from ..engine.simulation import Simulation  # noqa: E402
-from ..io.output import Output  # noqa: E402
-from ..scene.derive import derive  # noqa: E402
-from ..scene.load import resolve  # noqa: E402
+from ...engine import loop as L  # noqa: E402
+from ...engine.simulation import Simulation  # noqa: E402
+from ...io.output import Output  # noqa: E402
+from ...scene.derive import derive  # noqa: E402
+from ...scene.load import load  # noqa: E402
 
 T_IMPORTS = time.perf_counter() - T0
 
@@ -36,11 +36,11 @@ T_IMPORTS = time.perf_counter() - T0
 def scene_at(l: int, mode: str, precision: str, extra=()) -> dict:
     """The paper's geometry scaled to contact length l (top 10 x 100, substrate 20 x 300 at l = 100)."""
     s = l / 100
-    return resolve({}, [("lattice.top_rows", max(2, round(10 * s))), ("lattice.top_cols", l),
-                        ("lattice.bottom_rows", max(2, round(20 * s))), ("lattice.bottom_cols", 3 * l),
-                        ("drive.mode", mode), ("drive.v0", 1e-3 if mode != "shear" else 1e-4),
-                        ("load.ramp", 0.0), ("load.settle", 0.0), ("output.snapshots", 0),
-                        ("time.precision", precision), *extra])
+    return load({}, dict([("lattice.top_rows", max(2, round(10 * s))), ("lattice.top_cols", l),
+                          ("lattice.bottom_rows", max(2, round(20 * s))), ("lattice.bottom_cols", 3 * l),
+                          ("drive.mode", mode), ("drive.v0", 1e-3 if mode != "shear" else 1e-4),
+                          ("load.ramp", 0.0), ("load.settle", 0.0), ("output.snapshots", 0),
+                          ("time.precision", precision), *extra]))
 
 
 class _TimedWriter:

@@ -1,8 +1,8 @@
 """Scaling model of the time per step: what each rank computes and exchanges, a fit to measured runs, predictions.
 
-    python -m parslip.bench.scaling layout run/push_l500.toml --ranks 64      # per-rank table of the decomposition
-    python -m parslip.bench.scaling measure --sizes 100 300 500 1000 --ranks 1 2 3 --json points.json
-    python -m parslip.bench.scaling fit points.json --exclude-ranks 3 --predict 2000:64
+    python -m parslip.studies.bench.scaling layout run/push_l500.toml --ranks 64      # per-rank table of the decomposition
+    python -m parslip.studies.bench.scaling measure --sizes 100 300 500 1000 --ranks 1 2 3 --json points.json
+    python -m parslip.studies.bench.scaling fit points.json --exclude-ranks 3 --predict 2000:64
     parslip bench --scaling                                                    # measure, fit and predict in one
 
 The model.  Every step each rank updates its OWNED nodes and interface
@@ -32,7 +32,7 @@ every 1- or 2-rank point and cannot be told apart from c, so the fit on
 this machine leaves m out and a cluster prediction adds it from an assumed
 network latency (``predict``).
 
-Measured points come from ``parslip.bench.case`` under mpiexec (one JSON
+Measured points come from ``parslip.studies.bench.case`` under mpiexec (one JSON
 line per case: ``us_per_step``, per-phase times, owned nodes per rank).
 """
 from __future__ import annotations
@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model.lattice import BOTTOM, TOP
+from ...model.lattice import BOTTOM, TOP
 
 TERMS = {"N": "a", "S": "s", "H": "b", "M": "m", "1": "c"}
 UNITS = {"a": "us/node", "s": "us/site", "b": "us/value", "m": "us/message", "c": "us"}
@@ -133,7 +133,7 @@ def rank_share(lattice, layout) -> RankShare:
 
 def rank_shares(setup, ranks: int) -> list[RankShare]:
     """Every rank's share of a run of ``setup`` on ``ranks`` ranks (no MPI: the layouts are pure)."""
-    from ..parallel.layout import build_layout
+    from ...parallel.layout import build_layout
     lat = setup.lattice
     return [rank_share(lat, build_layout(lat, r, ranks, setup.reach, setup.scene["drive.mode"]))
             for r in range(ranks)]
@@ -284,13 +284,13 @@ def wait_quiet(limit: float = 0.1, timeout: float = 300.0, log=print) -> float |
 
 
 def run_case(l: int, ranks: int, seconds: float, mode: str, timeout: float) -> dict | None:
-    """``python -m parslip.bench.case`` under mpiexec in a session of its own; None if it ran past ``timeout`` s.
+    """``python -m parslip.studies.bench.case`` under mpiexec in a session of its own; None if it ran past ``timeout`` s.
 
     A case that runs too long (ranks spinning on an oversubscribed machine) is ended as a whole
     process group, so no rank is left behind spinning.
     """
-    from ..parallel.launcher import python_command
-    cmd = python_command("parslip.bench.case", "--l", l, "--mode", mode, "--precision", "float64",
+    from ...parallel.launcher import python_command
+    cmd = python_command("parslip.studies.bench.case", "--l", l, "--mode", mode, "--precision", "float64",
                          "--seconds", seconds, ranks=ranks)
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
@@ -322,7 +322,7 @@ def timed_case(l: int, ranks: int, seconds: float, mode: str, timeout: float = 3
 
 def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "shear", quiet: float | None = 0.1,
             tries: int = 4, timeout: float = 300.0, path: str | None = None, log=print) -> list[dict]:
-    """Run ``parslip.bench.case`` for every size and rank count; each point keeps its fastest clean repeat.
+    """Run ``parslip.studies.bench.case`` for every size and rank count; each point keeps its fastest clean repeat.
 
     The fastest, not the mean: on a shared machine other processes only ever slow a run down.  With
     ``quiet`` (a share of the cores), each repeat waits until others use at most that much, and a
@@ -334,7 +334,7 @@ def measure(sizes, ranks, seconds: float = 3.0, repeats: int = 2, mode: str = "s
     (a measurement stopped half-way continues).  A case past ``timeout`` s counts as a repeat with no
     time; a point whose repeats all timed out has ``us_per_step`` None.
     """
-    from ..scene.derive import derive
+    from ...scene.derive import derive
     from .case import scene_at
     out = []
     if path and os.path.exists(path):
@@ -417,22 +417,22 @@ def _points_table(f: Fit, points: list[dict]) -> str:
 
 def _scene_setup(spec: str, mode: str):
     """'2000' (the paper's geometry scaled to l = 2000, ``bench.case.scene_at``) or a scene file."""
-    from ..scene.derive import derive
+    from ...scene.derive import derive
     if spec.isdigit():
         from .case import scene_at
         return derive(scene_at(int(spec), mode, "float64"))
-    from ..scene.load import load
+    from ...scene.load import load
     return derive(load(spec, []))
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m parslip.bench.scaling", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python -m parslip.studies.bench.scaling", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
     lay = sub.add_parser("layout", help="per-rank table of a scene's decomposition")
     lay.add_argument("scene", help="scene file, or a contact length l for the paper's geometry scaled")
     lay.add_argument("--ranks", type=int, required=True)
     lay.add_argument("--mode", default="shear", help="drive mode when SCENE is a contact length")
-    me = sub.add_parser("measure", help="run parslip.bench.case at several sizes and rank counts")
+    me = sub.add_parser("measure", help="run parslip.studies.bench.case at several sizes and rank counts")
     me.add_argument("--sizes", type=int, nargs="+", default=[100, 200, 300, 500, 700, 1000])
     me.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 3])
     me.add_argument("--seconds", type=float, default=3.0)
