@@ -40,3 +40,20 @@ class WriteError(RunError):
 
 class OptionalPartMissing(ConfigError):
     """A command needs an optional extra that is not installed: the message names the extra (exit 2)."""
+
+
+# Optional modules and the extra of pyproject.toml that installs each.
+EXTRAS = {"pyvista": "viz", "imageio": "viz", "imageio_ffmpeg": "viz", "mkdocs": "docs", "pandas": "study",
+          "xarray": "study", "h5netcdf": "study"}
+
+
+def optional(module: str, purpose: str):
+    """Import an optional module, or raise ``OptionalPartMissing`` naming the extra that installs it:
+    ``optional("pyvista", "parslip render")``."""
+    import importlib
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        extra = EXTRAS.get(module, module)
+        raise OptionalPartMissing(f"{purpose} needs {module}, which is not installed; accepted: install the "
+                                  f"[{extra}] extra (python -m pip install -e \".[{extra}]\")") from None

@@ -139,3 +139,31 @@ def test_snapshot_script_renders_through_render_py(small_run, tmp_path):
                         "--field", "syy", "--png", str(png)], capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == 0, p.stderr
     assert Image.open(png).size == WINDOW and "step 1 of" in p.stdout
+
+
+def _without_pyvista(tmp_path, *argv):
+    """`parslip ARGV` in a Python where importing pyvista fails (as where the [viz] extra is missing)."""
+    import subprocess
+    import sys
+
+    from helpers import cli_env
+    code = ("import sys; sys.modules['pyvista'] = None; from parslip.cli.main import main; "
+            f"sys.exit(main({list(map(str, argv))!r}))")
+    return subprocess.run([sys.executable, "-c", code], env=cli_env(), capture_output=True, text=True, timeout=300,
+                          cwd=tmp_path)
+
+
+def test_without_the_viz_extra_render_says_which_extra(small_run, tmp_path):
+    p = _without_pyvista(tmp_path, "render", small_run, "--field", "sxy", "-o", tmp_path / "a.png")
+    assert p.returncode == 2, p.stderr
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "needs pyvista" in lines[0] and "[viz]" in lines[0], p.stderr
+
+
+def test_without_the_viz_extra_figures_skip_the_maps_and_say_so(small_run, tmp_path):
+    p = _without_pyvista(tmp_path, "figures", small_run, "-o", tmp_path / "figs")
+    assert p.returncode == 0, p.stderr
+    assert "Traceback" not in p.stderr
+    skipped = [ln for ln in p.stderr.splitlines() if "stress maps skipped" in ln]
+    assert len(skipped) == 1 and "[viz]" in skipped[0], p.stderr
+    assert (tmp_path / "figs" / "spacetime.png").exists() and not list((tmp_path / "figs").glob("map_*"))

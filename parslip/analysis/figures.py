@@ -13,6 +13,7 @@ The colours of the first four fronts are the paper's: blue, orange, green, brown
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import logging
 import math
 import os
@@ -372,10 +373,10 @@ def map_times(run) -> list[float]:
 def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> list[str]:
     """sigma_xy and sigma_xx over the lattice with the interface bonds in red, rendered off screen by
     ``parslip.analysis.render.render_frame``; skipped with a logged note when that module is absent."""
-    try:
-        render = importlib.import_module("parslip.analysis.render")
-    except ImportError:
-        log.info("stress maps skipped: parslip.analysis.render is not installed in this checkout")
+    from . import render
+    if importlib.util.find_spec("pyvista") is None:
+        log.warning("stress maps skipped: they are drawn with pyvista, which is not installed; accepted: install "
+                    "the [viz] extra (python -m pip install -e \".[viz]\")")
         return []
     if not len(run.snapshot_times):
         log.info("stress maps skipped: the run holds no snapshots (output.snapshots = 0)")

@@ -153,7 +153,8 @@ class _Scene:
     """One off-screen plotter; ``draw`` puts a snapshot in it with fixed camera and colour limits."""
 
     def __init__(self, window=WINDOW):
-        import pyvista as pv
+        from ..errors import optional
+        pv = optional("pyvista", "drawing a snapshot")
         self.pv = pv
         self.pl = pv.Plotter(off_screen=True, window_size=list(window))
         self.pl.set_background("white")
@@ -229,6 +230,11 @@ def render_movie(run, field: str, path: str, *, fps: float = 4.0, clim=None, win
         raise ConfigError(f"--fps {fps:g}: accepted: > 0 frames per second")
     n = len(run.snapshot_times)
     snapshot_index(run, None)                       # ConfigError when there are none
+    from ..errors import optional
+    optional("pyvista", f"writing the movie {path}")
+    optional("imageio", f"writing the movie {path}")
+    if ext == ".mp4":
+        optional("imageio_ffmpeg", f"writing the movie {path}")
     meshes = [run.snapshot(k) for k in range(n)]
     if clim is None:
         clim = colour_limits(np.concatenate([field_values(m, f) for m in meshes]), f)

@@ -142,7 +142,8 @@ class Run:
 
     def _pv_reader(self):
         if self._reader is None:
-            import pyvista as pv
+            from ..errors import optional
+            pv = optional("pyvista", "reading a snapshot as a mesh")
             self._reader = pv.get_reader(self.path, force_ext=".vtkhdf")
             self._reader.reader.UpdateInformation()
         return self._reader
