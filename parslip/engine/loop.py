@@ -170,16 +170,22 @@ def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, 
     tasks = sched.tasks
     pb = sched.ptr[phase, 0]            # the substrate (BOTTOM) block
     pt = sched.ptr[phase, 1]            # the sliding (TOP) block
-    _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, iface.zeros,
-          drive, False, shift, gy)
+    # A call passes a few hundred bytes of array descriptors: skip the empty ones (one rank has no EARLY
+    # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
+    if pb[NODES] > pb[ROWS]:
+        _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y,
+              iface.zeros, drive, False, shift, gy)
     if phase == LATE:
         exchange(PROGRESS, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, iface.counters)
-    _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, drive,
-           False, shift, gy)
-    _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y, iface.zeros,
-          drive, drive_on, shift, gy)
-    _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y, drive,
-           drive_on, shift, gy)
+    if pb[END] > pb[NODES]:
+        _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, drive,
+               False, shift, gy)
+    if pt[NODES] > pt[ROWS]:
+        _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y,
+              iface.zeros, drive, drive_on, shift, gy)
+    if pt[END] > pt[NODES]:
+        _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y, drive,
+               drive_on, shift, gy)
 
 
 @njit(cache=True, _nrt=False)
