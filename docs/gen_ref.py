@@ -9,10 +9,12 @@ no file of ``docs/``:
                               builds, found by walking its subparsers (a new
                               subcommand, nested ones included, appears by itself)
   reference/output-format.md  the run file's datasets, from ``parslip.io.contract``
+  reference/python-api.md     ``parslip.run``, ``parslip.open``, the ``Run`` object, ``Outcome`` and the
+                              errors, from their docstrings
 
 The parslip documented is the one in this checkout (the repository root is put
-first on ``sys.path``).  It imports the schema, the command-line parser module
-and the output contract only: none of them starts MPI or compiles with numba
+first on ``sys.path``).  It imports the schema, the command-line parser module,
+the output contract and the API's modules only: none of them starts MPI or compiles with numba
 (``tests/test_docs.py`` checks that).  Each ``*_page()`` function returns the
 Markdown of one page and can be called without MkDocs.
 """
@@ -258,10 +260,48 @@ def output_format_page() -> str:
     return "\n".join(out)
 
 
+# --- Python API -----------------------------------------------------------------------------------
+
+def python_api_page() -> str:
+    import parslip
+    from parslip import errors
+    from parslip.analysis import results
+    from parslip.engine import runner
+
+    out = ["# Python API", "",
+           GENERATED_NOTE.format(source="the docstrings of `parslip/__init__.py`, `parslip/analysis/results.py`, "
+                                        "`parslip/engine/runner.py`, `parslip/errors.py`"),
+           "How to use it: [Python and notebooks](../guide/python.md).", ""]
+    for name in ("run", "open"):
+        f = getattr(parslip, name)
+        out += [f"## `parslip.{name}{inspect.signature(f)}`", "", "```text", inspect.getdoc(f) or "", "```", ""]
+    out += ["## `Run`: what `parslip.run` and `parslip.open` return", "", "```text",
+            inspect.getdoc(results.Run) or "", "```", "", "| member | what it is |", "| --- | --- |"]
+    for n, m in inspect.getmembers(results.Run):
+        if n.startswith("_"):
+            continue
+        doc = inspect.getdoc(m.fget if isinstance(m, property) else getattr(m, "func", m)) or ""
+        kind = "property" if isinstance(m, (property, )) or type(m).__name__ == "cached_property" else "method"
+        sig = "" if kind == "property" else str(inspect.signature(m))
+        out.append(f"| `{n}{sig}` | {_cell(doc.split(chr(10) + chr(10))[0])} |")
+    out += ["", "## `Outcome`: how a run ended (`Run.outcome`)", "", "```text",
+            inspect.getdoc(runner.Outcome) or "", "```", "", "| field | default |", "| --- | --- |"]
+    for fld in runner.Outcome.__dataclass_fields__.values():
+        out.append(f"| `{fld.name}` | {_cell(repr(fld.default) if not callable(fld.default_factory) else '{}')} |")
+    out += ["", "## Errors", "", "| exception | base | exit code on the command line | what it means |",
+            "| --- | --- | --- | --- |"]
+    for n, c in inspect.getmembers(errors, inspect.isclass):
+        if issubclass(c, Exception) and c.__module__ == errors.__name__:
+            code = getattr(c, "exit_code", "")
+            out.append(f"| `{n}` | `{c.__bases__[0].__name__}` | {code} | {_cell((inspect.getdoc(c) or '').split(chr(10))[0])} |")
+    return "\n".join(out) + "\n"
+
+
 PAGES = {
     "reference/keys.md": keys_page,
     "reference/cli.md": cli_page,
     "reference/output-format.md": output_format_page,
+    "reference/python-api.md": python_api_page,
 }
 
 
