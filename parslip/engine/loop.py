@@ -44,6 +44,9 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy step cursor")
 # Integer parameters ``ip``.
 (I_NRAMP, I_NDS, I_DRIVE, I_FRAME_EVERY, I_NFRAMES, I_CHECK, I_HAS_IFACE, I_RIGID, I_BROW, I_FOFF) = range(10)
 I_SIZE = 10
+# ip[I_DRIVE]: 0 no drive; DRIVE_X the driven face's x is prescribed; DRIVE_XY its y is also held where
+# it was when the drive started (``drive.hold = "xy"``).
+DRIVE_X, DRIVE_XY = 1, 2
 # Float parameters ``fp`` (float64).
 F_DT, F_V0, F_FEXT, F_JUMP = range(4)
 # State-type parameters ``sp``: C = dt^2/(1 + zeta dt/2), the factor on forces; 1 if zeta > 0.
@@ -98,6 +101,8 @@ def _rows(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, zeros, drive0, drive_on,
         if drive and drive_on:
             for j in range(j0, j0 + n):
                 px[r, j] = drive0[r, j] + shift
+                if drive_on == DRIVE_XY:
+                    py[r, j] = cy[r, j]
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
@@ -117,6 +122,8 @@ def _nodes(t0, t1, tasks, cx, cy, px, py, K, sp, ex, ey, drive0, drive_on, shift
             node_masked(cx, cy, px, py, r, j, s, K, b, damped, mask, cf, fx, fy)
         if drive and drive_on:
             px[r, j] = drive0[r, j] + shift
+            if drive_on == DRIVE_XY:
+                py[r, j] = cy[r, j]
 
 
 @njit(cache=True, _nrt=False)
@@ -126,10 +133,10 @@ def _tasks(phase, ptr, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, K, sp, ifa
     With ``plan`` (the late phase), MPI is given a chance to move the halo messages halfway through."""
     p = ptr[phase]
     _rows(p[0, 0], p[0, 1], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, iface.zeros, drive0,
-          False, shift, gy)
+          0, shift, gy)
     if plan is not None:
         exchange(PROGRESS, plan, nbx, nby, ntx, nty, iface.partner, iface.x0, iface.counters)
-    _nodes(p[0, 1], p[0, 2], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, drive0, False, shift, gy)
+    _nodes(p[0, 1], p[0, 2], tasks, cbx, cby, nbx, nby, K, sp, iface.exb_x, iface.exb_y, drive0, 0, shift, gy)
     _rows(p[1, 0], p[1, 1], tasks, ctx, cty, ntx, nty, K, sp, iface.ext_x, iface.ext_y, iface.zeros, drive0,
           drive_on, shift, gy)
     _nodes(p[1, 1], p[1, 2], tasks, ctx, cty, ntx, nty, K, sp, iface.ext_x, iface.ext_y, drive0, drive_on, shift,
@@ -191,7 +198,7 @@ def _check(n, tasks, cbx, cby, ctx, cty, nbx, nby, ntx, nty, ip, jump, iface, fl
 def _step(n, cbx, cby, ctx, cty, nbx, nby, ntx, nty, plan, tasks, ptr, K, ip, fp, sp, iface, drive0,
           flags, tm):
     n_ds = ip[I_NDS]
-    drive_on = ip[I_DRIVE] != 0 and n >= n_ds
+    drive_on = ip[I_DRIVE] if n >= n_ds else 0        # DRIVE_X or DRIVE_XY once the drive runs
     if ip[I_DRIVE] != 0 and n == n_ds:
         for r in range(drive0.shape[0]):
             for j in range(drive0.shape[1]):

@@ -50,7 +50,7 @@ class Simulation:
         c = 0.5 * zeta * st.dt
         lat = st.lattice
         self.ip = np.zeros(L.I_SIZE, np.int64)
-        self.ip[:] = [st.n_ramp, st.n_drive_start, int(sc["drive.mode"] != "none"), st.frame_every, st.n_frames,
+        self.ip[:] = [st.n_ramp, st.n_drive_start, (0 if sc["drive.mode"] == "none" else L.DRIVE_XY if sc.get("drive.hold", "x") == "xy" else L.DRIVE_X), st.frame_every, st.n_frames,
                       CHECK_EVERY, int(lat.has_interface), int(lat.rigid),
                       self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1), 0]
         fext = -sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0

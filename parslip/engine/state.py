@@ -15,6 +15,7 @@ import numpy as np
 from ..model.lattice import BOTTOM, DIRECTIONS, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
+from ..scene.derive import rebond_within
 from .kernels import interface as ik
 from .loop import Iface, Levels
 
@@ -84,7 +85,8 @@ class State:
                 geom[ik.G_BOWN0] = geom[ik.G_BOWN1] = geom[ik.G_BLO]
             consts[:] = [sc["interface.delta0"], sc["interface.delta_b"], sc["interface.kx"], sc["interface.ky"],
                          float(sc["interface.reform_x0"] == "zero"), reach.drift, 1.0 / setup.l,
-                         1.0 / (DENSITY * mat.c_r ** 2)]
+                         1.0 / (DENSITY * mat.c_r ** 2), rebond_within(sc),
+                         float(sc.get("interface.rebond", "nearest") == "facing")]
         self.iface = Iface(partner=partner, x0=np.zeros(wt, dt), claim=np.zeros(wt, np.int64),
                            taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
                            exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),

@@ -13,7 +13,8 @@ and the opposite force on the bottom node.  Each step, at positions u(t):
 1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b;
 2. each free top site claims the nearest free bottom site within delta0
    (ties: lower bottom index), looking at the substrate columns within
-   ``window`` of its nearest one;
+   ``window`` of its nearest one (``P_REBOND`` replaces delta0 here; with
+   ``P_FACING`` it looks at the nearest column only);
 3. claims are granted in increasing top-site order, so when two free top
    sites reach the same bottom site the lower global index wins and the
    other waits a step; a re-formed bond takes x0 = x_ij then (starts
@@ -38,8 +39,10 @@ BREAKS, FORMS = 0, 1
  G_TFIRST, G_TLAST, G_BCOLS, G_RIGID, G_TCOVER, G_BCOVER) = range(18)
 G_SIZE = 18
 # Indices into the float constants ``p`` (state float type).
-P_DELTA0, P_DELTAB, P_KX, P_KY, P_REFORM_ZERO, P_DRIFT, P_INV_L, P_TRACTION = range(8)
-P_SIZE = 8
+# P_REBOND: the largest length at which a free site re-bonds (delta0 unless ``interface.rebond_within``);
+# P_FACING: nonzero to re-bond only to the facing substrate site (the nearest column), not the nearest free one.
+P_DELTA0, P_DELTAB, P_KX, P_KY, P_REFORM_ZERO, P_DRIFT, P_INV_L, P_TRACTION, P_REBOND, P_FACING = range(10)
+P_SIZE = 10
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -64,7 +67,9 @@ def update(tx, ty, bx, by, partner, x0, taken, claim, g, p, counters, reach, ext
     bbase, blo, bhi, bcols, w = g[G_BBASE], g[G_BLO], g[G_BHI], g[G_BCOLS], g[G_WINDOW]
     bown0, bown1 = g[G_BOWN0], g[G_BOWN1]
     d0, db, kx, ky = p[P_DELTA0], p[P_DELTAB], p[P_KX], p[P_KY]
-    db2, d02 = db * db, d0 * d0
+    db2, d02 = db * db, p[P_REBOND] * p[P_REBOND]
+    if p[P_FACING] != 0:
+        w = 0
     zero = like(0, d0)
     for i in range(blo, bhi):
         taken[i] = 0
