@@ -236,6 +236,16 @@ def live_pulses(run, t: float) -> int:
     return sum(1 for f in edge_fronts(run) if f.nucleation_time < t <= float(f.tip["t"][-1]))
 
 
+def in_flight_at_nucleation(run, i: int = 3) -> int:
+    """Edge fronts in flight just before the i-th (0-based) edge front nucleates (the paper's 'three pulses
+    ... another new pulse is about to nucleate'), so a nucleation a frame early or late does not count the
+    newborn; -1 when there is no i-th front."""
+    fr = edge_fronts(run)
+    if len(fr) <= i:
+        return -1
+    return live_pulses(run, fr[i].nucleation_time - 1e-9)
+
+
 def secondary_fronts(run, lo: float = 0.03, hi: float = 0.25, min_sites: int = 3) -> int:
     """Fronts (of at least ``min_sites`` sites) nucleated inside the contact at lo <= distance from the rear
     edge <= hi and running toward the driven edge (Sec. 3.2.2: T+ secondary fronts from x/l ~ 0.1)."""
@@ -330,12 +340,11 @@ def _passage_frames(run) -> dict:
     return {s: sorted(v) for s, v in out.items()}
 
 
-def front_slip(run, front_index: int, margin: float = MARGIN) -> float:
-    """Slip u (l) one front carries, measured over a window around the front: at each site it crosses,
-    u from ``margin`` before its tip arrives to ``margin`` after the site re-bonds, the window clipped at
-    the midpoints to the neighbouring fronts' passages there; the median over the sites.  Unlike the
-    catalogue's ``slip_u`` (the whole span between neighbouring fronts, the whole record for a lone
-    front), a front's slip so does not grow with the length of the run."""
+def passage_slip(run, front_index: int, margin: float = MARGIN) -> float:
+    """Slip u (l) that happens while a front passes: at each site it crosses, u from ``margin`` before its
+    tip arrives to ``margin`` after the site re-bonds (the window clipped at the midpoints to the
+    neighbouring fronts' passages there); the median over the sites.  The jump a front makes, without
+    the creep of the bonded interface between fronts."""
     fr = run.fronts()
     if len(fr) <= front_index or "ux" not in run.interface:
         return math.nan
@@ -360,24 +369,35 @@ def front_slip(run, front_index: int, margin: float = MARGIN) -> float:
     return float(np.median(out)) if out else math.nan
 
 
-def median_front_slip(run, n: int = 4) -> float:
-    s = [front_slip(run, i) for i in range(min(n, len(run.fronts())))]
+def front_slip(run, front_index: int) -> float:
+    """Slip u (l) one front carries (Sec. 3.4's Delta u): the catalogue's ``slip_u``, all the motion of each
+    site it crosses between the midpoints in time to the neighbouring fronts' passages there (from t = 0
+    for the first front, as the paper's Delta u of the first front is counted from the start).  For the
+    record's last front the window runs to the end of the record, so that front is not used (NaN):
+    its slip would grow with the run's length."""
+    fr = run.fronts()
+    if len(fr) <= front_index + 1:
+        return math.nan
+    return float(fr[front_index].slip_u)
+
+
+def median_front_slip(run, n: int = 4, first: int = 1) -> float:
+    """Median ``front_slip`` of fronts ``first`` .. ``n`` - 1 (0-based): by default the interior ones, each
+    with a front before and after it, so every window is bounded on both sides."""
+    s = [front_slip(run, i) for i in range(first, min(n, len(run.fronts())))]
     s = [v for v in s if math.isfinite(v)]
     return float(np.median(s)) if s else math.nan
 
 
 def first_front_excess(run, n: int = 3) -> float:
     """Slip of the first front over the median slip of fronts 2..n (Sec. 3.4: the first is larger)."""
-    if len(run.fronts()) < 2:
-        return math.nan
     first = front_slip(run, 0)
-    rest = [front_slip(run, i) for i in range(1, min(n, len(run.fronts())))]
-    rest = [v for v in rest if math.isfinite(v)]
-    return first / float(np.median(rest)) if rest and np.median(rest) > 0 else math.nan
+    rest = median_front_slip(run, n, 1)
+    return first / rest if math.isfinite(first) and math.isfinite(rest) and rest > 0 else math.nan
 
 
 def slip_spread(run, fronts=range(1, 6)) -> float:
-    """Coefficient of variation of ``front_slip`` over the given edge fronts (constant slip per pulse)."""
+    """Coefficient of variation of ``front_slip`` over the given fronts (constant slip per pulse)."""
     s = [front_slip(run, i) for i in fronts if i < len(run.fronts())]
     s = [v for v in s if math.isfinite(v)]
     return float(np.std(s) / np.mean(s)) if len(s) > 1 and np.mean(s) > 0 else math.nan
@@ -460,15 +480,15 @@ def peak_slip_velocity(run, x: float) -> float:
 
 
 def stationary_before_arrival(run, x: float = 0.98) -> float:
-    """u gained at the site nearest ``x`` (in the frame of its own drive-free motion) before the first
-    front reaches it, over the slip that front then carries: near 0 when the site stays put until then."""
+    """u gained at the site nearest ``x`` before the first front reaches it, over the jump that front then
+    makes (``passage_slip``): near 0 when the site stays put until then."""
     s = int(np.argmin(np.abs(run.x - x)))
     passes = _passage_frames(run).get(s)
     if not passes:
         return math.nan
     ux = run.interface["ux"][:, s]
     k = max(passes[0] - 1, 0)                       # the last frame before the tip arrives
-    slip = front_slip(run, 0)
+    slip = passage_slip(run, 0)                     # the jump the first front then makes
     return float((ux[k] - ux[0]) / slip) if slip and math.isfinite(slip) else math.nan
 
 

@@ -331,8 +331,9 @@ def _score(rows: list[dict], scan_keys: set) -> tuple[int, int]:
 def scan_readings(out_dir: str, sets: dict | None = None, shrink: bool = False, comm=None, combos: bool = True,
                   numerics: bool = True, rerun: bool = False) -> dict:
     """Score the base reading (the schema defaults with ``sets``), each other option of every reading alone,
-    the promising combinations (each reading that alone beats the base, added to the best single one,
-    and all of them at once) and the numerics of ``NUMERICS``, by the claims the scan roles measure.
+    the promising combinations (from the best single reading, greedily adding the reading that raises the
+    score most, every remaining one tried at each step) and the numerics of ``NUMERICS``, by the claims
+    the scan roles measure.
     Writes ``out_dir/readings.md`` and ``readings.json``; returns {"settings": [...], "claims": {...}}."""
     rank0 = comm is None or comm.Get_rank() == 0
     base = dict(sets or {})
@@ -342,7 +343,7 @@ def scan_readings(out_dir: str, sets: dict | None = None, shrink: bool = False, 
     def run_setting(label: str, change: dict, kind: str):
         s = dict(base, **change)
         runs, made = make_runs(os.path.join(out_dir, "readings", _slug(change)), SCAN_ROLES, s, shrink, comm, rerun)
-        notes = [mk.note for mk in made if mk.note]
+        notes = list(dict.fromkeys(mk.note for mk in made if mk.note))
         rows = cl.evaluate(runs) if rank0 else []
         agree, n = _score(rows, scan_keys) if rank0 else (0, 0)
         results.append({"label": label, "kind": kind, "change": change, "agree": agree, "of": n,
@@ -359,16 +360,20 @@ def scan_readings(out_dir: str, sets: dict | None = None, shrink: bool = False, 
                 continue
             singles.append(run_setting(f"{r.key} = {value!r} ({label})", {r.key: value}, "reading"))
     if combos:
-        better = sorted([s for s in singles if s["agree"] > b["agree"] and not s["note"]],
-                        key=lambda s: -s["agree"])
-        if len(better) > 1:
-            best = better[0]
-            for other in better[1:]:
-                ch = dict(best["change"], **other["change"])
-                run_setting(" + ".join(f"{k} = {v!r}" for k, v in ch.items()), ch, "combination")
-            if len(better) > 2:
-                ch = {k: v for s in better for k, v in s["change"].items()}
-                run_setting(" + ".join(f"{k} = {v!r}" for k, v in ch.items()), ch, "combination")
+        # Greedy: from the best single reading, add the one other reading (any option) that raises the score
+        # most, until none does; each step scores every remaining reading added to the current best.
+        ok = [s_ for s_ in singles if not s_["note"]]
+        best = max(ok, key=lambda s_: s_["agree"], default=None)
+        while best is not None and best["agree"] > b["agree"]:
+            tried = []
+            for s_ in ok:
+                (key, value), = s_["change"].items()
+                if key in best["change"]:
+                    continue
+                ch = dict(best["change"], **{key: value})
+                tried.append(run_setting(" + ".join(f"{k} = {v!r}" for k, v in ch.items()), ch, "combination"))
+            step = max(tried, key=lambda s_: s_["agree"], default=None)
+            best = step if step is not None and step["agree"] > best["agree"] and not step["note"] else None
     if numerics:
         for label, ch in NUMERICS:
             run_setting(label, ch, "numerics")
