@@ -447,3 +447,13 @@ def test_in_flight_when_the_fourth_nucleates():
     assert m.in_flight_at_nucleation(run, 3) == 3
     assert m.live_pulses(run, 700 * DT + 1e-9) == 4
     assert m.in_flight_at_nucleation(run, 7) == -1
+
+
+def test_alternative_measurements_are_judged_by_the_claims_tolerance(runs):
+    alts = cl.alternatives(runs)
+    keys = {a["key"] for a in alts}
+    assert "pull_push_speed" in keys and "push_width" in keys
+    (speed,) = [a for a in alts if a["key"] == "pull_push_speed"]
+    assert speed["parslip"] == "0.5" and speed["verdict"] == cl.AGREES          # drawn: half the speed
+    for a in alts:
+        assert a["verdict"] in cl.VERDICTS and a["key"] in {c.key for c in cl.CLAIMS}

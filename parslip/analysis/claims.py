@@ -398,6 +398,49 @@ def _fast_from_edge(run) -> float:
     return m.crack_speed(run, 0) if abs(fr[0].nucleation_x - m.driven_edge(run)) < m.EDGE else 0.0
 
 
+def _passage_ratio(runs) -> float:
+    push = [m.passage_slip(runs["push"], i) for i in range(1, 6)]
+    shear = [m.passage_slip(runs["shear"], i) for i in range(0, 3)]
+    push, shear = [v for v in push if math.isfinite(v)], [v for v in shear if math.isfinite(v)]
+    if not push or not shear:
+        return math.nan
+    import numpy as np
+    return float(np.median(push) / np.median(shear))
+
+
+# Other ways to read a measurement off the same runs: the analysis-only causes a disagreement could have.
+# claim key -> [(what the other reading is, measure on the runs)]
+ALTERNATIVES: dict[str, list[tuple[str, Callable[[dict], object]]]] = {
+    "push_width": [("white runs in the constant-time section t c_r/l = 30 (the paper's own reading, Sec. 3.1.1)",
+                    lambda r: m.section_width(r["push"], 30.0))],
+    "pull_push_speed": [("each pulse's mean speed over its whole run, acceleration included",
+                         lambda r: m.speed_ratio(r["pull"], r["push"], how="mean"))],
+    "slip_ratio": [("the jump while a front passes (passage_slip), without the creep between fronts",
+                    _passage_ratio)],
+    "push_stationary": [("the share at x/l = 0.98, near the far edge (Fig. 10a: 'more pronounced')",
+                         lambda r: m.slip_share_in_passages(r["push"], 0.98))],
+    "push_same_speed": [("the first three pulses only", lambda r: m.speed_spread(r["push"], 3))],
+}
+
+
+def alternatives(runs: dict) -> list[dict]:
+    """Each ``ALTERNATIVES`` measurement on ``runs``: rows of key, how, value (formatted), verdict against
+    the claim's own tolerance."""
+    by = {c.key: c for c in CLAIMS}
+    out = []
+    for key, alts in ALTERNATIVES.items():
+        c = by[key]
+        for how, fn in alts:
+            if any(k not in runs for k in c.needs):
+                continue
+            try:
+                v = fn(runs)
+            except (IndexError, ValueError, ZeroDivisionError, KeyError):
+                v = None
+            out.append({"key": key, "how": how, "parslip": fmt(v), "verdict": verdict(c.accept, v)})
+    return out
+
+
 def roles_needed(claims=None) -> list[str]:
     out = []
     for c in claims or CLAIMS:

@@ -348,7 +348,8 @@ def scan_readings(out_dir: str, sets: dict | None = None, shrink: bool = False, 
         agree, n = _score(rows, scan_keys) if rank0 else (0, 0)
         results.append({"label": label, "kind": kind, "change": change, "agree": agree, "of": n,
                         "seconds": round(sum(mk.seconds for mk in made), 1),
-                        "note": "; ".join(notes), "rows": rows})
+                        "note": "; ".join(notes), "rows": rows,
+                        "alternatives": cl.alternatives(runs) if rank0 and kind == "base" else []})
         return results[-1]
 
     now = dict(default_reading(), **{k: v for k, v in base.items() if k in default_reading()})
@@ -411,6 +412,11 @@ def _write_readings(out_dir: str, results: list[dict], scan_keys: set) -> None:
                                                     else x["parslip"]).replace("|", "/"))
             lines.append(f"| {r['label']} | " + " | ".join(cells) + " |")
         lines += ["", "Bold: agrees."]
+    alts = [a for a in base.get("alternatives", []) if a["key"] in {row["key"] for row in dis}]
+    if alts:
+        lines += ["", "## The same base runs, measured another way", "",
+                  "| claim | measured as | parslip | verdict |", "| --- | --- | --- | --- |"]
+        lines += [f"| {a['key']} | {a['how']} | {a['parslip']} | {a['verdict']} |" for a in alts]
     with open(os.path.join(out_dir, "readings.md"), "w") as fh:
         fh.write("\n".join(lines) + "\n")
     with open(os.path.join(out_dir, "readings.json"), "w") as fh:
