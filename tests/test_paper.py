@@ -457,3 +457,17 @@ def test_alternative_measurements_are_judged_by_the_claims_tolerance(runs):
     assert speed["parslip"] == "0.5" and speed["verdict"] == cl.AGREES          # drawn: half the speed
     for a in alts:
         assert a["verdict"] in cl.VERDICTS and a["key"] in {c.key for c in cl.CLAIMS}
+
+
+def test_tip_peak_follows_the_leading_pulse_in_flight():
+    """Fast pulses (240 frames to cross, one every 200): the first has left when the fourth is born, so
+    the peak is read ahead of the earliest pulse still in flight; with none in flight it is not measured."""
+    iface = blank(1300)
+    for k0 in (100, 300, 500, 700):
+        draw(iface, k0, 0, +1, 4, 2, 0.01)
+    run = _with_mode2_stress(iface)
+    assert m.tip_peak_constancy(run) == pytest.approx(1.0)
+    iface = blank(1300)
+    for k0 in (100, 400, 700, 1000):
+        draw(iface, k0, 0, +1, 4, 2, 0.01)
+    assert math.isnan(m.tip_peak_constancy(_with_mode2_stress(iface)))

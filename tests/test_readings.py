@@ -84,8 +84,8 @@ def test_kn_spring_across_swaps_the_springs():
     (c_r) stay those of nu."""
     kn, kt = born_stiffness(cl_over_cs(0.2, "plane_strain"), 1.0)
     assert (kn, kt) == pytest.approx((7 / 3, 1 / 9))
-    along = derive(scene()).material
-    across = derive(scene(**{"material.kn_spring": "across"})).material
+    along = derive(scene(**{"material.velocity_unit": "c_s"})).material
+    across = derive(scene(**{"material.kn_spring": "across", "material.velocity_unit": "c_s"})).material
     assert (along.kn_top, along.kt_top, along.kn_bottom, along.kt_bottom) == pytest.approx((kn, kt, 100.0, 0.0))
     assert (across.kn_top, across.kt_top, across.kn_bottom, across.kt_bottom) == pytest.approx((kt, kn, 0.0, 100.0))
     assert across.c_r == along.c_r
@@ -94,7 +94,8 @@ def test_kn_spring_across_swaps_the_springs():
 
 
 def test_velocity_unit_c_r_scales_the_block_against_the_interface():
-    """c_r = 1: the block's k_n, k_t grow by (c_s/c_r)^2 = 1.2050 while k_x, k_y, F_N and the substrate stay."""
+    """c_r = 1 (the default): the block's k_n, k_t grow by (c_s/c_r)^2 = 1.2050 against c_s = 1, while k_x,
+    k_y, F_N and the substrate stay."""
     cs = derive(scene(**{"material.velocity_unit": "c_s"})).material
     cr = derive(scene(**{"material.velocity_unit": "c_r"})).material
     assert cr.c_r == pytest.approx(1.0, abs=1e-12)
@@ -107,3 +108,13 @@ def test_velocity_unit_c_r_scales_the_block_against_the_interface():
 def test_bad_reading_values_are_refused(key, value):
     with pytest.raises(ConfigError, match=key.replace(".", r"\.")):
         scene(**{key: value})
+
+
+def test_shipped_defaults_are_the_chosen_reading():
+    """The reading `parslip paper --readings` chose (docs/model/readings.md): c_r as the velocity unit and a
+    re-formed bond's rest offset 0; the other readings keep the old behaviour."""
+    sc = scene()
+    assert sc["material.velocity_unit"] == "c_r" and sc["interface.reform_x0"] == "zero"
+    assert (sc["material.kn_spring"], sc["drive.hold"], sc["interface.rebond"], sc["interface.rebond_within"],
+            sc["material.bottom_kn"], sc["load.FN"], sc["lattice.bottom_cols"], sc["material.model"]) == \
+        ("along", "x", "nearest", 0.0, 100.0, 1.0, 300, "plane_strain")

@@ -567,12 +567,17 @@ def tip_peak(run, front, t: float, field: str = "sxy", sites: int = 5) -> float:
 
 
 def tip_peak_constancy(run) -> float:
-    """max/min of the sxy peak ahead of the leading front's tip at the second, third and fourth
-    nucleations (Sec. 3.1.3: the peak at the tip stays constant as the pulse runs)."""
+    """max/min of the sxy peak ahead of the leading tip at the second, third and fourth nucleations
+    (Sec. 3.1.3: the peak at the tip stays constant as the pulse runs); the leading tip is the
+    earliest-born edge front still in flight then (the first one, while it is)."""
     fr = edge_fronts(run)
     if len(fr) < 4:
         return math.nan
-    peaks = [tip_peak(run, fr[0], fr[i].nucleation_time) for i in (1, 2, 3)]
+    peaks = []
+    for i in (1, 2, 3):
+        t = fr[i].nucleation_time
+        alive = [f for f in fr[:i] if f.nucleation_time < t <= float(f.tip["t"][-1])]
+        peaks.append(tip_peak(run, alive[0], t) if alive else math.nan)
     if not all(math.isfinite(p) and p > 0 for p in peaks):
         return math.nan
     return max(peaks) / min(peaks)

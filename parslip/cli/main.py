@@ -22,8 +22,8 @@ from ..parallel.launcher import start_or_refuse
 from ..scene.load import load_scene_file, parse_set, resolve
 from ..scene.schema import describe_keys
 
-UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_s of the top
-block (or c_r with material.velocity_unit = "c_r"); scene times, like the
+UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_r of the top
+block (or c_s with material.velocity_unit = "c_s"); scene times, like the
 output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
 `parslip keys` lists every scene key with its default, units and range."""
 

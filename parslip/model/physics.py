@@ -6,8 +6,9 @@ back from the stiffnesses, the classical Rayleigh speed used to normalise
 results, and the lattice's own surface-wave speed.
 
 Units: lattice spacing a = 1, node mass m = 1, and velocities in units of
-c_ref, which is the top block's shear speed c_s (default) or its Rayleigh
-speed c_r (``material.velocity_unit = "c_r"``).  Time is then in a/c_ref and
+c_ref, which is the top block's Rayleigh speed c_r (default, the paper's
+Sec. 2 normalisation) or its shear speed c_s (``material.velocity_unit =
+"c_s"``).  Time is then in a/c_ref and
 stiffness in m c_ref^2 / a^2.  The mass density of the triangular lattice is
 rho = m / (sqrt(3)/2 a^2) = 2/sqrt(3).
 """

@@ -57,7 +57,7 @@ SCHEMA: dict[str, Key] = {
                        _range(-1.0, 1.0 / 3.0, lo_open=True), "Poisson ratio of the top block"),
     "material.model": Key("plane_strain", str, "-", "'plane_strain' or 'plane_stress'",
                           _choice("plane_strain", "plane_stress"), "how nu maps to c_l/c_s"),
-    "material.velocity_unit": Key("c_s", str, "-", "'c_s' or 'c_r'", _choice("c_s", "c_r"),
+    "material.velocity_unit": Key("c_r", str, "-", "'c_r' or 'c_s'", _choice("c_s", "c_r"),
                                   "the velocity the stiffnesses are made dimensionless with (a = m = 1): the "
                                   "top block's shear speed c_s, or its Rayleigh speed c_r (the paper's Sec. 2 "
                                   "normalises velocities by c_r); sets k_n, k_t against the fixed k_x, k_y and F_N"),
@@ -77,8 +77,10 @@ SCHEMA: dict[str, Key] = {
                             "unloaded gap; a free top node re-bonds within this distance"),
     "interface.delta_b": Key(0.7, float, "a", "> delta0", _range(0.0, lo_open=True),
                              "bond length at which an interface bond breaks"),
-    "interface.reform_x0": Key("current", str, "-", "'current' or 'zero'", _choice("current", "zero"),
-                               "rest offset of a re-formed bond: its offset when it forms, or 0"),
+    "interface.reform_x0": Key("zero", str, "-", "'zero' or 'current'", _choice("current", "zero"),
+                               "rest offset x_ij^0 of a re-formed bond (Eq. 2.3): 0, that of two facing nodes, "
+                               "as for the bonds of the initial state; or its offset when it forms (it starts "
+                               "unstressed in x)"),
     "interface.rebond": Key("nearest", str, "-", "'nearest' or 'facing'", _choice("nearest", "facing"),
                             "which substrate node a free top node re-bonds to: the nearest free one within "
                             "interface.rebond_within, or only the one facing it (the nearest column)"),
