@@ -29,6 +29,7 @@ def test_paper_command_end_to_end(tmp_path, capsys):
     assert md.count("\n| ") == len(cl.CLAIMS) + 2 + 2 + 3          # claims table, runs table (3 roles)
     for f in ("push/spacetime.png", "push/front_speed.png", "push/mode2_fit.csv", "shear/spacetime.png"):
         assert (out / "figures" / f).exists(), f
+    assert len(list((out / "figures" / "shear").glob("map_sxy_t*.png"))) >= 1      # T0 maps from shear_maps
     assert [r["role"] for r in js["runs"]] == ["push", "shear", "shear_maps"]
     assert not any(r["reused"] for r in js["runs"])
     # a second call reuses every run it finds complete with the same scene
@@ -109,3 +110,21 @@ def test_role_scenes_scale_and_read_f_n_per_node():
     assert (s["lattice.top_cols"], s["lattice.bottom_cols"], s["lattice.top_rows"]) == (300, 600, 30)
     assert s["load.FN"] == 300.0
     assert st.role_scene("shear_maps", maps_duration=68.0)["output.snapshots"] == 136
+
+
+def test_t0_map_times_are_the_first_fronts_not_the_later_ones():
+    """A shear run with three fronts: the maps show the first one's start, middle and end (Fig. 7a), clipped
+    to the maps run's last snapshot, never a later front's time beyond it."""
+    import numpy as np
+    from helpers import DT, NS, blank, draw
+    from parslip.analysis.results import Run
+    iface = blank(1400)
+    for k0 in (100, 500, 900):
+        draw(iface, k0, 0, +1, 1, NS, 0.008, crack=True)
+    shear = Run.from_arrays(iface, {"drive.mode": "shear", "drive.v0": 1e-4})
+    maps = Run.from_arrays(iface, {"drive.mode": "shear"})
+    maps.__dict__["snapshot_times"] = np.arange(0, 8.01, 0.5)
+    t = st.first_front_times(shear, maps)
+    assert t == pytest.approx([100 * DT, (100 + NS // 2) * DT, (100 + NS - 1) * DT])
+    maps.__dict__["snapshot_times"] = np.arange(0, 6.01, 0.5)
+    assert max(st.first_front_times(shear, maps)) == 6.0

@@ -209,6 +209,15 @@ def make_runs(run_dir: str, roles=None, sets: dict | None = None, shrink: bool =
 FIGURES_SCALED = ("spacetime", "front_speed")
 
 
+def first_front_times(shear, maps) -> list[float]:
+    """Fig. 7a's three moments of the first T0 front: its nucleation, its tip halfway, its last site; kept
+    within the maps run's snapshots."""
+    f = shear.fronts()[0]
+    tt = f.tip["t"]
+    t_max = float(maps.snapshot_times[-1]) if len(maps.snapshot_times) else float(tt[-1])
+    return [min(float(t), t_max) for t in (tt[0], tt[len(tt) // 2], tt[-1])]
+
+
 def write_figures(runs: dict, fig_dir: str) -> list[str]:
     """Each run's figure set under ``fig_dir/<role>/`` (the l = 300/500 runs: space-time and speed only),
     the T0 stress maps from shear_maps, the v0 sweep and push against pull."""
@@ -221,9 +230,9 @@ def write_figures(runs: dict, fig_dir: str) -> list[str]:
         if role == "shear" or role.startswith("push_v0"):
             only = [f for f in figures.FIGURES if f != "stress_maps"]
         paths += figures.write_all(run, os.path.join(fig_dir, role), only)
-    if MAPS in runs and "shear" in runs:
+    if MAPS in runs and "shear" in runs and runs["shear"].fronts():
         paths += figures.fig_stress_maps(runs[MAPS], os.path.join(fig_dir, "shear"),
-                                         times=figures.map_times(runs["shear"]))
+                                         times=first_front_times(runs["shear"], runs[MAPS]))
     sweep = [runs[k] for k in ("push_v0_1e-2", "push", "push_v0_1e-4") if k in runs]
     if len(sweep) > 1:
         paths += figures.compare_speeds(sweep, fig_dir, scale="v0", name="v0_sweep")[0]
