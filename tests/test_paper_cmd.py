@@ -128,3 +128,22 @@ def test_t0_map_times_are_the_first_fronts_not_the_later_ones():
     assert t == pytest.approx([100 * DT, (100 + NS // 2) * DT, (100 + NS - 1) * DT])
     maps.__dict__["snapshot_times"] = np.arange(0, 6.01, 0.5)
     assert max(st.first_front_times(shear, maps)) == 6.0
+
+
+def test_the_measurements_never_start_a_run():
+    """analysis.paper and analysis.claims only read runs: no engine, no subprocess, no studies import; the
+    runs start in studies.paper.run_scene alone."""
+    import ast
+    import parslip.analysis.claims
+    import parslip.analysis.paper
+    for mod in (parslip.analysis.paper, parslip.analysis.claims):
+        tree = ast.parse(open(mod.__file__).read())
+        names = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names |= {a.name for a in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                names.add(("." * node.level) + (node.module or ""))
+        assert not any("engine" in n or "subprocess" in n or "studies" in n for n in names), (mod.__name__, names)
+    src = open(st.__file__).read()
+    assert src.count("subprocess.run(") == 1 and "def run_scene" in src
