@@ -147,3 +147,14 @@ def test_the_measurements_never_start_a_run():
         assert not any("engine" in n or "subprocess" in n or "studies" in n for n in names), (mod.__name__, names)
     src = open(st.__file__).read()
     assert src.count("subprocess.run(") == 1 and "def run_scene" in src
+
+
+def test_paper_under_mpiexec_on_two_ranks(tmp_path):
+    """Rank 0 drives the study (the runs start one at a time through run_scene); one report, exit 0."""
+    from helpers import require, run_cli
+    require("gather")
+    p = run_cli(2, "paper", "-o", tmp_path / "p", "--shrink", "--role", "push", "--no-figures")
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.count("claims agree") == 1
+    js = json.loads((tmp_path / "p" / "claims.json").read_text())
+    assert [r["role"] for r in js["runs"]] == ["push"] and js["runs"][0]["exit"] == 0
