@@ -15,8 +15,8 @@ units, the tolerance fixed with the claim, the verdict; 'not measured' counts
 against the share that agrees) and the figure set under OUT/figures/.  Roles:
 push, pull (100 l/c_r), shear (300 l/c_r, three fronts), shear_maps (dense
 snapshots round the first break), push_v0_1e-2 and push_v0_1e-4 (the v0 sweep),
-push_l300, pull_l300, shear_l300, shear_l500 (Sec. 4.4).  About 7 minutes on
-one rank when nothing is there yet.
+push_l300, pull_l300, shear_l300, shear_l500 (Sec. 4.4).  About 5 minutes on
+one rank when nothing is there yet (the l = 500 run 3 of them).
 
 --readings instead scores the paper's open readings (each scene key of
 parslip.studies.paper.READINGS flipped alone, the promising combinations, and
