@@ -73,7 +73,7 @@ def test_real_runs_identical_then_coarser_cadence(small_run, tmp_path):
     m = accuracy.metrics(coarse, ref)
     assert m["first_break_t"] <= 2 / 24 + 1e-9 and m["first_break_x"] == 0
     assert 0 < m["spacetime"] < 0.05
-    assert m["speed"] < 0.2
+    assert m["speed"] < 0.35        # SMALL's pulses run at ~0.45 c_r: 0.9 sites per coarse frame
 
 
 def test_knob_settings_follow_the_scene():

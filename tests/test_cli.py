@@ -84,8 +84,9 @@ def test_existing_output_is_never_overwritten(capsys, tmp_path, push):
 def test_info_reports_both_stability_criteria(capsys, push):
     code, out, _ = _run(capsys, "info", push)
     assert code == 0
-    for frag in ("k_n = 2.33333", "k_t = 0.111111", "c_r = 0.910996", "0.94750 c_s", "2/omega_max",
-                 "a/c_l = 0.612372", "ranks            1 to", "MiB"):
+    # velocities in c_r (the default unit): Eq. 2.2's 7/3 and 1/9 times (c_s/c_r)^2 = 1/0.910996^2
+    for frag in ("k_n = 2.81154", "k_t = 0.133883", "c_r = 1 = 0.91100 c_s", "0.94750 c_s", "2/omega_max",
+                 "a/c_l = 0.557869", "ranks            1 to", "MiB"):
         assert frag in out, frag
 
 

@@ -119,10 +119,11 @@ def test_real_run_catalogue(small_run):
             assert it["intact"][k, s] == 0 and (k == 0 or it["intact"][k - 1, s] == 1)
     # Each pulse moves the bonds it passes on by one substrate site (the partner index),
     # so the slip it carries is about one lattice spacing, 1/24 l here.
+    # The first carries more (its window starts at t = 0, with the loading: Sec. 3.4).
     p = it["partner"]
-    for f in fr[:-1]:
-        mid = (f.tip["x"] > 0.2) & (f.tip["x"] < 0.8)
-        assert np.median(f.tip["du"][mid]) == pytest.approx(1 / 24, rel=0.25)
+    du = [float(np.median(f.tip["du"][(f.tip["x"] > 0.2) & (f.tip["x"] < 0.8)])) for f in fr[:-1]]
+    assert du[1:] == pytest.approx([1 / 24] * (len(du) - 1), rel=0.25)
+    assert du[0] > max(du[1:])
     s = len(run.x) // 2
     hops = np.diff(p[:, s][p[:, s] >= 0]).sum()
     passed = sum(1 for f in fr if f.tip["x"].max() >= run.x[s])

@@ -1,48 +1,49 @@
-"""The paper reproduced: its quantitative statements beside parslip's measurements, and the runs behind them.
+"""Measurements of the paper's quantitative statements on any run (``parslip.open`` results).
 
-Responsible for (1) CLAIMS, each of the paper's quantitative statements with
-the paper's value, where in the .tex it comes from, the run it needs and how
-parslip measures it from that run; (2) ``comparison`` / ``markdown``, which
-turn a set of runs into the comparison table (Markdown); (3) SCENES and
-``reproduce``, which run or find those runs and write every figure set,
-the comparisons and the table (``postprocess/paper.py`` is a thin wrapper).
+Responsible for the numbers ``analysis.claims`` compares with the paper:
+nucleation times and sites, pulse intervals, speeds and accelerations,
+widths, the slip a front carries, slip velocities, interface stresses around
+a tip and the Mode II fit, re-attachment behind a fast front.  Each function
+takes runs, never starts one (``parslip.studies`` does that), and returns
+NaN (or None) when the run does not hold what it needs.
 
-Runs are keyed by role: ``push``, ``pull``, ``shear`` (the three shipped
-scenes) and ``push_v0_1e-2``, ``push_v0_1e-4`` (the v0 sweep of Fig. 2d;
-``push`` is v0/c_r = 1e-3).  Units: t in l/c_r, x and slip in l, speeds in
-c_r, widths in lattice spacings a.
+Units: t in l/c_r, x and slip in l, speeds in c_r, widths in lattice
+spacings a (one interface site = one a), interface stresses in rho c_r^2.
 """
 from __future__ import annotations
 
-import logging
 import math
-import os
-import subprocess
-from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
-log = logging.getLogger("parslip")
-
 EDGE = 0.05          # l: a front "nucleates at the driven edge" within this distance of it
-STEADY = (0.1, 0.6)  # x_tip/l range where pulses run at their steady speed (they accelerate past ~0.7)
+STEADY = (0.1, 0.6)  # distance from the nucleation site (l) where pulses run at their steady speed
+MARGIN = 0.25        # l/c_r: a front's slip window starts this long before its tip arrives, ends this long
+                     # after the site re-bonds
 
 
-# --- measurements -------------------------------------------------------------------
+def _nan(v) -> bool:
+    return v is None or (isinstance(v, float) and not math.isfinite(v))
+
+
+def driven_edge(run) -> float:
+    """x/l of the edge a run's drive loads first: 1 for pull, else 0."""
+    return 1.0 if run.mode == "pull" else 0.0
+
+
+# --- fronts at the driven edge ---------------------------------------------------------
 
 def edge_fronts(run) -> list:
     """Fronts nucleated at the edge the run's drive loads first: x = 0 for push and shear, 1 for pull."""
-    edge = 1.0 if run.mode == "pull" else 0.0
+    edge = driven_edge(run)
     return [f for f in run.fronts() if abs(f.nucleation_x - edge) < EDGE]
 
 
 def edge_nucleations(run, min_sites: int = 5, max_gap: float = 3.0) -> list:
     """Every front nucleated at the driven edge (``edge_fronts``), counting one cut short by the end of
     the record: a front with fewer than ``min_sites`` sites counts when its tip was still advancing
-    within ``max_gap`` l/c_r of the last frame (it is young, not small), e.g. the tenth pulse of the
-    push scene, born at 96.4 l/c_r with three sites broken by 100."""
-    edge = 1.0 if run.mode == "pull" else 0.0
+    within ``max_gap`` l/c_r of the last frame (it is young, not small)."""
+    edge = driven_edge(run)
     t_end = float(run.times[-1]) if len(run.times) else 0.0
     return [f for f in run.fronts(min_sites=1) if abs(f.nucleation_x - edge) < EDGE
             and (len(f.tip["x"]) >= min_sites or t_end - float(f.tip["t"][-1]) <= max_gap)]
@@ -52,24 +53,46 @@ def nucleation_times(run, n: int = 4) -> list[float]:
     return [f.nucleation_time for f in edge_fronts(run)[:n]]
 
 
+def nucleation_time(run, i: int) -> float:
+    """Nucleation time of the i-th (0-based) edge front, l/c_r; NaN if there is none."""
+    t = nucleation_times(run, i + 1)
+    return t[i] if len(t) > i else math.nan
+
+
+def intervals(run) -> np.ndarray:
+    """Times between successive nucleations at the driven edge, l/c_r."""
+    return np.diff([f.nucleation_time for f in edge_fronts(run)])
+
+
 def interval(run) -> float:
     """Mean time between successive nucleations at the driven edge, l/c_r."""
-    t = [f.nucleation_time for f in edge_fronts(run)]
-    return float(np.mean(np.diff(t))) if len(t) > 1 else math.nan
+    d = intervals(run)
+    return float(np.mean(d)) if len(d) else math.nan
 
 
-def steady_speed(front, lo: float = STEADY[0], hi: float = STEADY[1]) -> float:
-    """Median |v|/c_r of a front while its distance from its nucleation site is within [lo, hi] l."""
-    d = np.abs(front.tip["x"] - front.nucleation_x)
-    v = np.abs(front.tip["v"][(d >= lo) & (d <= hi)])
-    return float(np.median(v)) if len(v) else math.nan
+def interval_spread(run) -> float:
+    """Coefficient of variation (std / mean) of the nucleation intervals at the driven edge."""
+    d = intervals(run)
+    return float(np.std(d) / np.mean(d)) if len(d) > 1 else math.nan
 
 
-def mean_steady_speed(run, n: int = 3) -> float:
-    """Mean of ``steady_speed`` over the first ``n`` edge fronts, c_r."""
-    v = [steady_speed(f) for f in edge_fronts(run)[:n]]
-    v = [x for x in v if math.isfinite(x)]
-    return float(np.mean(v)) if v else math.nan
+def nucleation_site(run) -> float:
+    """Median x/l of the edge fronts' nucleation sites; NaN when no front nucleated at the edge."""
+    fr = edge_fronts(run)
+    return float(np.median([f.nucleation_x for f in fr])) if fr else math.nan
+
+
+def directions(run) -> float:
+    """Share of the edge fronts that run away from the driven edge (+1 from x = 0, -1 from x = 1)."""
+    fr = edge_fronts(run)
+    away = -1 if run.mode == "pull" else 1
+    return float(np.mean([f.direction == away for f in fr])) if fr else math.nan
+
+
+def pulse_share(run) -> float:
+    """Share of the edge fronts the catalogue calls pulses (bonds re-attached behind the tip)."""
+    fr = edge_fronts(run)
+    return float(np.mean([f.kind == "pulse" for f in fr])) if fr else math.nan
 
 
 def first_break_time(run) -> float:
@@ -78,414 +101,640 @@ def first_break_time(run) -> float:
     return math.nan if t is None else t
 
 
-def crack_speed(run) -> float:
-    """Median |v|/c_r of the first front once its tip is past x/l = 0.2."""
-    fr = run.fronts()
-    if not fr:
-        return math.nan
-    f = fr[0]
-    v = np.abs(f.tip["v"][np.abs(f.tip["x"] - f.nucleation_x) > 0.2])
+def first_break_frame(run) -> int | None:
+    broken = (run.interface["intact"] == 0).any(axis=1)
+    k = np.flatnonzero(broken)
+    return int(k[0]) if len(k) else None
+
+
+# --- speeds ------------------------------------------------------------------------------
+
+def _stretch(front, lo: float, hi: float) -> np.ndarray:
+    d = np.abs(front.tip["x"] - front.nucleation_x)
+    return (d >= lo) & (d <= hi)
+
+
+def steady_speed(front, lo: float = STEADY[0], hi: float = STEADY[1]) -> float:
+    """Median |v|/c_r of a front while its distance from its nucleation site is within [lo, hi] l."""
+    v = np.abs(front.tip["v"][_stretch(front, lo, hi)])
     return float(np.median(v)) if len(v) else math.nan
 
 
-def median_slip(run, n: int = 4) -> float:
-    """Median over the first ``n`` fronts of the slip u each carries, l."""
-    s = [f.slip_u for f in run.fronts()[:n] if math.isfinite(f.slip_u)]
-    return float(np.median(s)) if s else math.nan
+def steady_speeds(run, n: int = 4) -> list[float]:
+    return [steady_speed(f) for f in edge_fronts(run)[:n]]
 
+
+def mean_steady_speed(run, n: int = 3) -> float:
+    """Mean of ``steady_speed`` over the first ``n`` edge fronts, c_r."""
+    v = [x for x in steady_speeds(run, n) if math.isfinite(x)]
+    return float(np.mean(v)) if v else math.nan
+
+
+def speed_spread(run, n: int = 4) -> float:
+    """max / min of the steady speeds of the first ``n`` edge fronts (all n needed)."""
+    v = steady_speeds(run, n)
+    if len(v) < n or not all(math.isfinite(x) and x > 0 for x in v):
+        return math.nan
+    return max(v) / min(v)
+
+
+def speed_constancy(run, n: int = 3) -> float:
+    """Median over the first ``n`` edge fronts of |v(0.35-0.6) / v(0.1-0.35) - 1|: how much a pulse's
+    speed changes between the two halves of its steady stretch."""
+    out = []
+    for f in edge_fronts(run)[:n]:
+        a, b = steady_speed(f, 0.1, 0.35), steady_speed(f, 0.35, 0.6)
+        if math.isfinite(a) and math.isfinite(b) and a > 0:
+            out.append(abs(b / a - 1))
+    return float(np.median(out)) if out else math.nan
+
+
+def accel_x(run) -> float:
+    """x/l where the leading edge front starts to accelerate (``Front.accel_x``)."""
+    fr = edge_fronts(run)
+    return math.nan if not fr or fr[0].accel_x is None else float(fr[0].accel_x)
+
+
+def accel_time(front) -> float:
+    """t (l/c_r) at which a front's tip reached ``accel_x``; NaN if it never accelerated."""
+    if front.accel_x is None:
+        return math.nan
+    j = np.flatnonzero(front.tip["x"] == front.accel_x)
+    return float(front.tip["t"][j[0]]) if len(j) else math.nan
+
+
+def leading_accel_time(run) -> float:
+    fr = edge_fronts(run)
+    return accel_time(fr[0]) if fr else math.nan
+
+
+def max_speed_near_far_edge(run, within: float = 0.3) -> float:
+    """Largest |v|/c_r of the leading edge front over its last ``within`` l before the far edge."""
+    fr = edge_fronts(run)
+    if not fr:
+        return math.nan
+    f = fr[0]
+    far = 0.0 if run.mode == "pull" else 1.0
+    m = np.abs(f.tip["x"] - far) <= within
+    return float(np.max(np.abs(f.tip["v"][m]))) if m.any() else math.nan
+
+
+def _speed_in(front, t0: float, t1: float) -> float:
+    m = (front.tip["t"] > t0) & (front.tip["t"] <= t1)
+    return float(np.median(np.abs(front.tip["v"][m]))) if m.any() else math.nan
+
+
+def trailing_speedup(run, window: float = 3.0) -> float:
+    """Speed of the second edge front over the ``window`` l/c_r after the leading one starts to accelerate,
+    over its speed in the ``window`` before (Sec. 3.1.2: the trailing pulses accelerate with it)."""
+    fr = edge_fronts(run)
+    if len(fr) < 2:
+        return math.nan
+    ta = accel_time(fr[0])
+    if not math.isfinite(ta):
+        return math.nan
+    before, after = _speed_in(fr[1], ta - window, ta), _speed_in(fr[1], ta, ta + window)
+    return after / before if math.isfinite(before) and before > 0 and math.isfinite(after) else math.nan
+
+
+def crack_speed(run, front_index: int = 0, past: float = 0.2) -> float:
+    """Median |v|/c_r of a front once its tip is more than ``past`` l from its nucleation site."""
+    fr = run.fronts()
+    if len(fr) <= front_index:
+        return math.nan
+    f = fr[front_index]
+    v = np.abs(f.tip["v"][np.abs(f.tip["x"] - f.nucleation_x) > past])
+    return float(np.median(v)) if len(v) else math.nan
+
+
+def later_crack_speeds(run, fronts=(1, 2), past: float = 0.2) -> float:
+    """The smallest ``crack_speed`` of fronts ``fronts`` (0-based), c_r; NaN if one is missing."""
+    v = [crack_speed(run, i, past) for i in fronts]
+    return min(v) if all(math.isfinite(x) for x in v) else math.nan
+
+
+def peak_speed(run, front_index: int = 0) -> float:
+    """Largest local |v|/c_r of a front (5-site fits)."""
+    fr = run.fronts()
+    return float(np.nanmax(np.abs(fr[front_index].tip["v"]))) if len(fr) > front_index else math.nan
+
+
+def crossing_time(run, front_index: int = 0, reach: float = 0.95) -> float:
+    """Time (l/c_r) a front takes from its nucleation to a tip ``reach`` l from its start across the
+    contact (the far edge for reach ~ 1); NaN if it never got there."""
+    fr = run.fronts()
+    if len(fr) <= front_index:
+        return math.nan
+    f = fr[front_index]
+    d = np.abs(f.tip["x"] - f.nucleation_x)
+    j = np.flatnonzero(d >= reach - 1e-9)
+    return float(f.tip["t"][j[0]] - f.nucleation_time) if len(j) else math.nan
+
+
+def live_pulses(run, t: float) -> int:
+    """Edge fronts nucleated before ``t`` whose tip had not yet reached its last site (in flight)."""
+    return sum(1 for f in edge_fronts(run) if f.nucleation_time < t <= float(f.tip["t"][-1]))
+
+
+def in_flight_at_nucleation(run, i: int = 3) -> int:
+    """Edge fronts in flight just before the i-th (0-based) edge front nucleates (the paper's 'three pulses
+    ... another new pulse is about to nucleate'), so a nucleation a frame early or late does not count the
+    newborn; -1 when there is no i-th front."""
+    fr = edge_fronts(run)
+    if len(fr) <= i:
+        return -1
+    return live_pulses(run, fr[i].nucleation_time - 1e-9)
+
+
+def secondary_fronts(run, lo: float = 0.03, hi: float = 0.25, min_sites: int = 3) -> int:
+    """Fronts (of at least ``min_sites`` sites) nucleated inside the contact at lo <= distance from the rear
+    edge <= hi and running toward the driven edge (Sec. 3.2.2: T+ secondary fronts from x/l ~ 0.1)."""
+    rear = 1.0 - driven_edge(run)
+    toward = 1 if driven_edge(run) == 1.0 else -1
+    return sum(1 for f in run.fronts(min_sites=min_sites)
+               if lo <= abs(f.nucleation_x - rear) <= hi and f.direction == toward)
+
+
+# --- widths ------------------------------------------------------------------------------
 
 def steady_width(run, n: int = 4) -> float:
     """Median width (a) of the first ``n`` edge fronts over their steady stretch."""
     w = []
     for f in edge_fronts(run)[:n]:
-        d = np.abs(f.tip["x"] - f.nucleation_x)
-        w += list(f.tip["w"][(d >= STEADY[0]) & (d <= STEADY[1])])
+        w += list(f.tip["w"][_stretch(f, *STEADY)])
     return float(np.median(w)) if w else math.nan
 
 
-def section_width(run, t: float) -> float:
-    """Median length, in lattice spacings a, of the runs of broken bonds in the frame nearest ``t`` (l/c_r).
+def width_variation(run, n: int = 4) -> float:
+    """Median over the first ``n`` edge fronts of the range (max - min, a) of the width over the middle
+    of the steady stretch (its 10th to 90th percentile, so one odd frame does not count)."""
+    out = []
+    for f in edge_fronts(run)[:n]:
+        w = f.tip["w"][_stretch(f, *STEADY)]
+        if len(w) > 2:
+            out.append(float(np.percentile(w, 90) - np.percentile(w, 10)))
+    return float(np.median(out)) if out else math.nan
 
-    The paper's reading of a pulse width (Sec. 3.1.1, appendix A): a constant-time
-    section of the space-time map, where each pulse is one white run.  Runs
-    that touch either edge of the contact are left out (a pulse being born or
-    leaving).  One site is one a.  NaN when the frame has no interior run.
-    """
+
+def far_edge_widening(run, n: int = 4, near: float = 0.85) -> float:
+    """Median over the first ``n`` edge fronts of (median width past ``near`` l from the nucleation site)
+    minus (median width over the steady stretch), a (appendix A: pulses widen near the far edge)."""
+    out = []
+    for f in edge_fronts(run)[:n]:
+        d = np.abs(f.tip["x"] - f.nucleation_x)
+        far, mid = f.tip["w"][d >= near], f.tip["w"][_stretch(f, *STEADY)]
+        if len(far) and len(mid):
+            out.append(float(np.median(far) - np.median(mid)))
+    return float(np.median(out)) if out else math.nan
+
+
+def width_jump(run, window: float = 3.0) -> float:
+    """Width change (a) of the second edge front across the leading one's acceleration: median width
+    over the ``window`` l/c_r after minus before (appendix A's jumps a, b, c)."""
+    fr = edge_fronts(run)
+    if len(fr) < 2:
+        return math.nan
+    ta = accel_time(fr[0])
+    f = fr[1]
+    tt, w = f.tip["t"], f.tip["w"]
+    before = w[(tt > ta - window) & (tt <= ta)]
+    after = w[(tt > ta) & (tt <= ta + window)]
+    if not math.isfinite(ta) or not len(before) or not len(after):
+        return math.nan
+    return float(np.median(after) - np.median(before))
+
+
+def section_width(run, t: float) -> float:
+    """Median length, in lattice spacings a, of the interior runs of broken bonds in the frame nearest ``t``
+    (the paper's reading of a pulse width: a constant-time section of the space-time map).  Runs that touch
+    either edge of the contact are left out.  NaN when the frame has no interior run."""
     broken = run.interface["intact"][run.frame_at(t)] == 0
     edges = np.flatnonzero(np.diff(np.concatenate(([0], broken.astype(np.int8), [0]))))
-    starts, ends = edges[::2], edges[1::2]                  # run i covers sites starts[i] .. ends[i] - 1
+    starts, ends = edges[::2], edges[1::2]
     keep = (starts > 0) & (ends < len(broken))
     return float(np.median(ends[keep] - starts[keep])) if keep.any() else math.nan
 
 
 def far_edge_width(run) -> float:
-    """Broken sites behind the first front's tip when it reaches its last site, a: the whole contact
-    (l / a sites) for a crack, less for a pulse, whose bonds re-attach behind it while it runs."""
+    """Broken sites behind the first front's tip when it reaches its last site, a."""
     fr = run.fronts()
     return float(fr[0].tip["w"][-1]) if fr else math.nan
 
 
+# --- slip -------------------------------------------------------------------------------
+
+def _rebond_frame(intact: np.ndarray, k: int, s: int) -> int:
+    """First frame at or after k where site s is intact (the last frame if it never re-bonds)."""
+    on = np.flatnonzero(intact[k:, s] == 1)
+    return k + int(on[0]) if len(on) else intact.shape[0] - 1
+
+
+def _passage_frames(run) -> dict:
+    """site -> sorted arrival frames of every catalogued front there."""
+    out: dict[int, list[int]] = {}
+    x = run.x
+    for f in run.fronts():
+        for xx, tt in zip(f.tip["x"], f.tip["t"]):
+            s = int(np.argmin(np.abs(x - xx)))
+            out.setdefault(s, []).append(run.frame_at(tt))
+    return {s: sorted(v) for s, v in out.items()}
+
+
+def passage_slip(run, front_index: int, margin: float = MARGIN) -> float:
+    """Slip u (l) that happens while a front passes: at each site it crosses, u from ``margin`` before its
+    tip arrives to ``margin`` after the site re-bonds (the window clipped at the midpoints to the
+    neighbouring fronts' passages there); the median over the sites.  The jump a front makes, without
+    the creep of the bonded interface between fronts."""
+    fr = run.fronts()
+    if len(fr) <= front_index or "ux" not in run.interface:
+        return math.nan
+    f = fr[front_index]
+    it, ux, t = run.interface["intact"], run.interface["ux"], run.times
+    if len(t) < 2:
+        return math.nan
+    dtf = float(np.median(np.diff(t)))
+    m = int(round(margin / dtf))
+    passes = _passage_frames(run)
+    out = []
+    for xx, tt in zip(f.tip["x"], f.tip["t"]):
+        s = int(np.argmin(np.abs(run.x - xx)))
+        k = run.frame_at(tt)
+        ks = passes.get(s, [k])
+        i = ks.index(k) if k in ks else int(np.argmin(np.abs(np.array(ks) - k)))
+        lo = (ks[i - 1] + k) // 2 if i > 0 else 0
+        hi = (k + ks[i + 1]) // 2 if i + 1 < len(ks) else len(t) - 1
+        k0 = max(lo, k - m)
+        k1 = min(hi, _rebond_frame(it, k, s) + m)
+        out.append(ux[k1, s] - ux[k0, s])
+    return float(np.median(out)) if out else math.nan
+
+
+def front_slip(run, front_index: int) -> float:
+    """Slip u (l) one front carries (Sec. 3.4's Delta u): the catalogue's ``slip_u``, all the motion of each
+    site it crosses between the midpoints in time to the neighbouring fronts' passages there (from t = 0
+    for the first front, as the paper's Delta u of the first front is counted from the start).  For the
+    record's last front the window runs to the end of the record, so that front is not used (NaN):
+    its slip would grow with the run's length."""
+    fr = run.fronts()
+    if len(fr) <= front_index + 1:
+        return math.nan
+    return float(fr[front_index].slip_u)
+
+
+def median_front_slip(run, n: int = 4, first: int = 1) -> float:
+    """Median ``front_slip`` of fronts ``first`` .. ``n`` - 1 (0-based): by default the interior ones, each
+    with a front before and after it, so every window is bounded on both sides."""
+    s = [front_slip(run, i) for i in range(first, min(n, len(run.fronts())))]
+    s = [v for v in s if math.isfinite(v)]
+    return float(np.median(s)) if s else math.nan
+
+
+def first_front_excess(run, n: int = 3) -> float:
+    """Slip of the first front over the median slip of fronts 2..n (Sec. 3.4: the first is larger)."""
+    first = front_slip(run, 0)
+    rest = median_front_slip(run, n, 1)
+    return first / rest if math.isfinite(first) and math.isfinite(rest) and rest > 0 else math.nan
+
+
+def slip_spread(run, fronts=range(1, 6)) -> float:
+    """Coefficient of variation of ``front_slip`` over the given fronts (constant slip per pulse)."""
+    s = [front_slip(run, i) for i in fronts if i < len(run.fronts())]
+    s = [v for v in s if math.isfinite(v)]
+    return float(np.std(s) / np.mean(s)) if len(s) > 1 and np.mean(s) > 0 else math.nan
+
+
+def median_slip(run, n: int = 4) -> float:
+    """Median over the first ``n`` fronts of the catalogue's slip_u (l)."""
+    s = [f.slip_u for f in run.fronts()[:n] if math.isfinite(f.slip_u)]
+    return float(np.median(s)) if s else math.nan
+
+
+def net_vertical_over_slip(run, n: int = 4) -> float:
+    """|median slip_v| / median slip_u of the first ``n`` fronts: the vertical displacement a pulse leaves
+    behind, relative to the slip it carries."""
+    fr = run.fronts()[:n]
+    if not fr:
+        return math.nan
+    u = float(np.median([f.slip_u for f in fr]))
+    v = float(np.median([f.slip_v for f in fr]))
+    return abs(v) / abs(u) if u else math.nan
+
+
+def lift_at_nucleation(run, within: float = 0.05) -> float:
+    """Median Delta v (l) of the site behind the first edge front's tip while the tip is within ``within`` l
+    of its nucleation site (Sec. 3.4: Delta v > 0 at the nucleation edge, the interface detaches)."""
+    fr = edge_fronts(run)
+    if not fr:
+        return math.nan
+    f = fr[0]
+    m = np.abs(f.tip["x"] - f.nucleation_x) <= within
+    v = f.tip["v_behind"][m]
+    v = v[np.isfinite(v)]
+    return float(np.median(v)) if len(v) else math.nan
+
+
+def slip_share_in_passages(run, x: float = 0.5, margin: float = 1.0) -> float:
+    """Share of the slip u at the site nearest ``x`` that happens while its bond is broken, give or take
+    ``margin`` l/c_r (Sec. 3.4: between pulses the interface does not slip)."""
+    s = int(np.argmin(np.abs(run.x - x)))
+    it, ux, t = run.interface["intact"][:, s], run.interface["ux"][:, s], run.times
+    if len(t) < 2:
+        return math.nan
+    total = ux[-1] - ux[0]
+    if total <= 0:
+        return math.nan
+    dtf = float(np.median(np.diff(t)))
+    m = int(round(margin / dtf))
+    broken = it == 0
+    near = np.convolve(broken.astype(int), np.ones(2 * m + 1, int), mode="same") > 0
+    du = np.diff(ux)
+    return float(du[near[1:]].sum() / total)
+
+
+def slip_velocity(run, x: float) -> tuple[np.ndarray, np.ndarray]:
+    """(t, du/dt) at the site nearest x: central differences of u in l over t in l/c_r, so in c_r."""
+    s = int(np.argmin(np.abs(run.x - x)))
+    return run.times, np.gradient(run.interface["ux"][:, s], run.times)
+
+
+def passage_contrast(run, x: float = 0.35, margin: float = 0.5) -> float:
+    """Mean slip velocity at the site nearest ``x`` while its bond is broken (give or take ``margin``)
+    over the mean outside those times (appendix C: u-dot rises as a pulse arrives, falls as it leaves)."""
+    s = int(np.argmin(np.abs(run.x - x)))
+    t, v = slip_velocity(run, x)
+    if len(t) < 3:
+        return math.nan
+    m = int(round(margin / float(np.median(np.diff(t)))))
+    broken = run.interface["intact"][:, s] == 0
+    near = np.convolve(broken.astype(int), np.ones(2 * m + 1, int), mode="same") > 0
+    if not near.any() or near.all():
+        return math.nan
+    out = abs(float(np.mean(v[~near])))
+    return float(np.mean(v[near])) / out if out > 0 else math.inf
+
+
+def peak_slip_velocity(run, x: float) -> float:
+    """Largest u-dot (c_r) at the site nearest ``x``."""
+    _, v = slip_velocity(run, x)
+    return float(np.max(v)) if len(v) else math.nan
+
+
+def stationary_before_arrival(run, x: float = 0.98) -> float:
+    """u gained at the site nearest ``x`` before the first front reaches it, over the jump that front then
+    makes (``passage_slip``): near 0 when the site stays put until then."""
+    s = int(np.argmin(np.abs(run.x - x)))
+    passes = _passage_frames(run).get(s)
+    if not passes:
+        return math.nan
+    ux = run.interface["ux"][:, s]
+    k = max(passes[0] - 1, 0)                       # the last frame before the tip arrives
+    slip = passage_slip(run, 0)                     # the jump the first front then makes
+    return float((ux[k] - ux[0]) / slip) if slip and math.isfinite(slip) else math.nan
+
+
+def sharp_peaks(run, points=(0.0, 0.35, 0.98), factor: float = 20.0) -> float:
+    """Smallest, over the ``points``, of peak u-dot over the median |u-dot| of the record (a crack's sharp
+    slip-velocity peak at each location, appendix C)."""
+    out = []
+    for x in points:
+        _, v = slip_velocity(run, x)
+        med = float(np.median(np.abs(v)))
+        out.append(float(np.max(v)) / med if med > 0 else math.inf)
+    return min(out) if out else math.nan
+
+
+def same_slip_everywhere(run, points=(0.0, 0.35, 0.98)) -> float:
+    """max/min over ``points`` of the first front's windowed slip at the site nearest each point (Sec. 3.4:
+    under T0 all locations slip alike)."""
+    fr = run.fronts()
+    if not fr:
+        return math.nan
+    f = fr[0]
+    it, ux = run.interface["intact"], run.interface["ux"]
+    m = int(round(MARGIN / float(np.median(np.diff(run.times)))))
+    vals = []
+    for x in points:
+        s = int(np.argmin(np.abs(run.x - x)))
+        hit = np.flatnonzero(np.isclose(f.tip["x"], run.x[s]))
+        if not len(hit):
+            return math.nan
+        k = run.frame_at(f.tip["t"][hit[0]])
+        k1 = min(len(run.times) - 1, _rebond_frame(it, k, s) + m)
+        vals.append(ux[k1, s] - ux[max(0, k - m), s])
+    vals = np.abs(vals)
+    return float(vals.max() / vals.min()) if vals.min() > 0 else math.inf
+
+
+# --- interface stresses -------------------------------------------------------------------
+
+def pre_break_profile(run, field: str):
+    """(x, field) along the interface in the frame before the first bond breaks; (None, None) if none broke."""
+    k = first_break_frame(run)
+    if k is None or field not in run.interface:
+        return None, None
+    return run.x, run.interface[field][max(k - 1, 0)]
+
+
+def argmax_before_break(run, field: str) -> float:
+    """x/l where ``field`` (sxy or syy) is largest in the frame before the first break."""
+    x, f = pre_break_profile(run, field)
+    return math.nan if x is None else float(x[int(np.argmax(f))])
+
+
+def min_before_break(run, field: str = "syy") -> float:
+    """Smallest ``field`` (rho c_r^2) along the interface in the frame before the first break (for syy:
+    the most compressive normal stress at nucleation)."""
+    x, f = pre_break_profile(run, field)
+    return math.nan if x is None else float(np.min(f))
+
+
+def centre_over_edges(run, field: str = "sxy") -> float:
+    """Mean ``field`` over the central 0.3-0.7 l over its mean over the outer 0.1 l at each end, in the frame
+    before the first break (Sec. 3.3.3: shear stress rising from the edges to the centre)."""
+    x, f = pre_break_profile(run, field)
+    if x is None:
+        return math.nan
+    edges = float(np.mean(f[(x < 0.1) | (x > 0.9)]))
+    centre = float(np.mean(f[(x >= 0.3) & (x <= 0.7)]))
+    return centre / edges if edges else math.inf
+
+
+def tip_peak(run, front, t: float, field: str = "sxy", sites: int = 5) -> float:
+    """Largest ``field`` over the ``sites`` sites ahead of ``front``'s tip at the frame nearest ``t``."""
+    from .figures import tip_profile
+    _, s = tip_profile(run, front, t, field, sites)
+    return float(np.max(s)) if len(s) else math.nan
+
+
+def tip_peak_constancy(run) -> float:
+    """max/min of the sxy peak ahead of the leading tip at the second, third and fourth nucleations
+    (Sec. 3.1.3: the peak at the tip stays constant as the pulse runs); the leading tip is the
+    earliest-born edge front still in flight then (the first one, while it is)."""
+    fr = edge_fronts(run)
+    if len(fr) < 4:
+        return math.nan
+    peaks = []
+    for i in (1, 2, 3):
+        t = fr[i].nucleation_time
+        alive = [f for f in fr[:i] if f.nucleation_time < t <= float(f.tip["t"][-1])]
+        peaks.append(tip_peak(run, alive[0], t) if alive else math.nan)
+    if not all(math.isfinite(p) and p > 0 for p in peaks):
+        return math.nan
+    return max(peaks) / min(peaks)
+
+
+def mode2_r2(run, front_index: int, times, sites: int = 8) -> float:
+    """Median R^2 of the Mode II fits (appendix B) of a front at ``times``: the straight line
+    sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2 through the ``sites`` sites ahead of its tip.  A fit with
+    K_II undefined (sigma^-2 not rising with xi) counts as R^2 = 0."""
+    from .figures import mode2_fit, tip_profile
+    fr = run.fronts()
+    if len(fr) <= front_index:
+        return math.nan
+    f = fr[front_index]
+    out = []
+    for t in times:
+        if not f.nucleation_time < t <= f.tip["t"][-1]:
+            continue
+        xi, s = tip_profile(run, f, t, "sxy", sites)
+        k2, _ = mode2_fit(xi, s)
+        if len(xi) < 3 or not math.isfinite(k2):
+            out.append(0.0)
+            continue
+        y = 1.0 / s ** 2
+        a, b = np.polyfit(xi, y, 1)
+        ss = float(np.sum((y - y.mean()) ** 2))
+        out.append(1.0 - float(np.sum((y - (a * xi + b)) ** 2)) / ss if ss > 0 else 0.0)
+    return float(np.median(out)) if out else math.nan
+
+
+def mode2_first_pulse(run) -> float:
+    """``mode2_r2`` of the first edge front at four moments of its steady run (appendix B, Fig. B1)."""
+    fr = edge_fronts(run)
+    if not fr:
+        return math.nan
+    f = fr[0]
+    i = run.fronts().index(f)
+    d = np.abs(f.tip["x"] - f.nucleation_x)
+    tt = f.tip["t"][(d >= 0.1) & (d <= 0.6)]
+    if len(tt) < 4:
+        return math.nan
+    return mode2_r2(run, i, [float(tt[int(q * (len(tt) - 1))]) for q in (0.0, 1 / 3, 2 / 3, 1.0)])
+
+
+def mode2_later_pulses(run) -> float:
+    """The smaller ``mode2_r2`` of the second and third edge fronts at the fourth nucleation (Fig. B2)."""
+    fr = edge_fronts(run)
+    if len(fr) < 4:
+        return math.nan
+    t = fr[3].nucleation_time
+    r = [mode2_r2(run, run.fronts().index(fr[i]), [t]) for i in (1, 2)]
+    return min(r) if all(math.isfinite(v) for v in r) else math.nan
+
+
+def tip_carries_both_peaks(run, sites: int = 5) -> float:
+    """At the first front's mid-crossing frame: the share of sxy and syy (0, 0.5 or 1) whose largest value
+    over the bonded sites lies within ``sites`` sites ahead of the tip (Sec. 3.3.3: peaks in both
+    components travel with the T0 rupture)."""
+    fr = run.fronts()
+    if not fr:
+        return math.nan
+    f = fr[0]
+    tt = f.tip["t"]
+    t = float(tt[len(tt) // 2])
+    k = run.frame_at(t)
+    x_tip = f.tip_at(run.times[k])
+    xi = f.direction * (run.x - x_tip)
+    bonded = run.interface["intact"][k] == 1
+    if not bonded.any():
+        return math.nan
+    hits = 0
+    dx = float(np.median(np.diff(run.x))) if len(run.x) > 1 else 1.0
+    for field in ("sxy", "syy"):
+        v = np.where(bonded, run.interface[field][k], -np.inf)
+        j = int(np.argmax(v))
+        hits += 0 < xi[j] <= sites * dx + 1e-12
+    return hits / 2
+
+
+# --- re-attachment behind a fast front ----------------------------------------------------
+
+def rebond_after_crossing(run, front_index: int = 0) -> float:
+    """Time (l/c_r) from the front's tip reaching its last site to the first re-bonding of a site it broke:
+    >= 0 when re-attachment starts only after the front crossed (Sec. 3.3.1's crack), < 0 for a pulse."""
+    fr = run.fronts()
+    if len(fr) <= front_index:
+        return math.nan
+    f = fr[front_index]
+    it = run.interface["intact"]
+    t_end = float(f.tip["t"][-1])
+    first = math.inf
+    for xx, tt in zip(f.tip["x"], f.tip["t"]):
+        s = int(np.argmin(np.abs(run.x - xx)))
+        k = run.frame_at(tt)
+        on = np.flatnonzero(it[k:, s] == 1)
+        if len(on):
+            first = min(first, float(run.times[k + on[0]]))
+    return first - t_end if math.isfinite(first) else math.inf
+
+
+def rebond_unevenness(run, front_index: int = 0) -> float:
+    """Longest over median time (l/c_r each) that the sites a front broke stay broken (Sec. 3.3.1, 4.4:
+    re-bonding is uneven, some regions stay detached much longer)."""
+    fr = run.fronts()
+    if len(fr) <= front_index:
+        return math.nan
+    f = fr[front_index]
+    it = run.interface["intact"]
+    d = []
+    for xx, tt in zip(f.tip["x"], f.tip["t"]):
+        s = int(np.argmin(np.abs(run.x - xx)))
+        k = run.frame_at(tt)
+        d.append(float(run.times[_rebond_frame(it, k, s)] - run.times[k]))
+    d = np.array(d)
+    med = float(np.median(d))
+    return float(d.max() / med) if med > 0 else math.nan
+
+
+def broken_share_at_crossing(run, front_index: int = 0) -> float:
+    """Largest share of the contact broken at once while the front runs (1 for a crack that opens all)."""
+    fr = run.fronts()
+    if len(fr) <= front_index:
+        return math.nan
+    f = fr[front_index]
+    k0, k1 = run.frame_at(f.nucleation_time), run.frame_at(float(f.tip["t"][-1]))
+    it = run.interface["intact"][k0:k1 + 1]
+    return float(np.max(np.mean(it == 0, axis=1))) if len(it) else math.nan
+
+
+# --- snapshots --------------------------------------------------------------------------
+
+def mean_block_sxx(run, t: float) -> float:
+    """Mean sigma_xx (rho c_r^2) over the top block in the snapshot nearest ``t``; NaN without snapshots."""
+    if not len(run.snapshot_times):
+        return math.nan
+    mesh = run.snapshot_at(t)
+    rows = run.scene.get("lattice.bottom_rows", 20)
+    if run.scene.get("lattice.substrate", "elastic") == "rigid":
+        rows = 1
+    y_cut = (rows - 1) * math.sqrt(3) / 2 + run.scene.get("interface.delta0", 0.5) / 2
+    top = np.asarray(mesh.points)[:, 1] > y_cut
+    return float(np.mean(np.asarray(mesh.point_data["sxx"])[top])) if top.any() else math.nan
+
+
 def speed_ratio(pull, push, n: int = 2, how: str = "steady") -> float:
-    """T+ / T- speed of the first ``n`` edge fronts: ``steady`` (``steady_speed``, the claims' reading)
-    or ``mean`` (each front's mean speed over its whole run, acceleration included), both in c_r."""
+    """T+ / T- speed of the first ``n`` edge fronts: ``steady`` (``steady_speed``) or ``mean`` (each front's
+    mean speed over its whole run, acceleration included), both in c_r."""
     def v(run):
         fr = edge_fronts(run)[:n]
-        return float(np.mean([steady_speed(f) if how == "steady" else abs(f.mean_speed) for f in fr]))
+        return float(np.mean([steady_speed(f) if how == "steady" else abs(f.mean_speed) for f in fr])) \
+            if fr else math.nan
     return v(pull) / v(push)
 
 
-def _fmt(v) -> str:
-    if isinstance(v, str):
-        return v
-    if isinstance(v, (list, tuple)):
-        return ", ".join(_fmt(x) for x in v) if v else "none"
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "n/a"
-    return f"{v:.3g}"
-
-
-# --- the claims ---------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Claim:
-    quantity: str
-    paper: str                      # the paper's value, as it states it
-    source: str                     # where in onset-of-slip.tex
-    needs: tuple[str, ...]          # run roles the measurement reads
-    measure: Callable[[dict], object]
-    units: str = ""
-
-
-def _v0_sweep(runs) -> str:
-    vals = [mean_steady_speed(runs[k]) / runs[k].v0 for k in ("push_v0_1e-2", "push", "push_v0_1e-4")]
-    ok = [v for v in vals if math.isfinite(v)]
-    spread = max(ok) / min(ok) if len(ok) > 1 else math.nan
-    return f"v/v0 = {_fmt(vals)} (max/min {_fmt(spread)})"
-
-
-def _kinds(run) -> str:
-    k = [f.kind for f in run.fronts()]
-    return f"{k.count('pulse')} pulse, {k.count('crack')} crack" if k else "no front"
-
-
-def _directions(run) -> str:
-    fr = edge_fronts(run)
-    d = sorted({f.direction for f in fr})
-    x = [f.nucleation_x for f in fr]
-    return f"x/l = {_fmt(float(np.median(x)))}, direction {d}" if fr else "no front at the edge"
-
-
-CLAIMS: list[Claim] = [
-    Claim("T- first four nucleation times", "5.1, 15.1, 25.2, 35.1", "Fig. 3 caption; Sec. 3.1.3",
-          ("push",), lambda r: nucleation_times(r["push"]), "l/c_r"),
-    Claim("T- nucleation site and direction", "x/l = 0, toward x/l = 1", "Sec. 3.1, Fig. 2b",
-          ("push",), lambda r: _directions(r["push"])),
-    Claim("T- pulse interval", "10.0 (from the Fig. 3 times); nearly constant", "Fig. 3 caption; Sec. 3.1.1",
-          ("push",), lambda r: interval(r["push"]), "l/c_r"),
-    Claim("T- pulses in 100 l/c_r", "10", "Sec. 3.1.1 (\"ten such pulses\")",
-          ("push",), lambda r: len(edge_nucleations(r["push"]))),
-    Claim("T- steady pulse speed", "<< 1 (Fig. 2c inset)", "Sec. 3.1.1-3.1.2",
-          ("push",), lambda r: mean_steady_speed(r["push"]), "c_r"),
-    Claim("T- leading pulse starts to accelerate at", "x/l ~ 0.7-0.8", "Sec. 3.1.1 (0.7), Sec. 3.1.2 (~0.8 l)",
-          ("push",), lambda r: edge_fronts(r["push"])[0].accel_x if edge_fronts(r["push"]) else math.nan, "l"),
-    Claim("T- pulse speed proportional to v0 (v0/c_r = 1e-2, 1e-3, 1e-4)", "v/v0 curves coincide",
-          "Sec. 3.1.2, Fig. 2d", ("push_v0_1e-2", "push", "push_v0_1e-4"), _v0_sweep),
-    Claim("T- kind of front", "pulse (bonds re-attach behind the tip)", "Sec. 3.1",
-          ("push",), lambda r: _kinds(r["push"])),
-    Claim("T- pulse width", "~1 a (w/l = 0.01), widening near the far edge", "Appendix A",
-          ("push",), lambda r: steady_width(r["push"]), "a"),
-    Claim("T- slip per pulse", "~0.04 l to 0.011 l, constant per pulse", "Sec. 3.4",
-          ("push",), lambda r: median_slip(r["push"]), "l"),
-    Claim("T- net vertical displacement after a pulse", "0 (bodies re-adhere)", "Sec. 3.4, Fig. 9b",
-          ("push",), lambda r: float(np.median([f.slip_v for f in r["push"].fronts()[:4]])), "l"),
-    Claim("T+ first four nucleation times", "5.4, 15.5, 25.7, 35.7", "Fig. 5 caption",
-          ("pull",), lambda r: nucleation_times(r["pull"]), "l/c_r"),
-    Claim("T+ nucleation site and direction", "x/l = 1, toward x/l = 0", "Sec. 3.2, Fig. 4b",
-          ("pull",), lambda r: _directions(r["pull"])),
-    Claim("T+ pulse interval", "10.1 (from the Fig. 5 times)", "Fig. 5 caption",
-          ("pull",), lambda r: interval(r["pull"]), "l/c_r"),
-    Claim("T+ / T- pulse speed (first two pulses)", "0.5 (\"50% slower in pulling\")", "Appendix D",
-          ("push", "pull"), lambda r: speed_ratio(r["pull"], r["push"])),
-    Claim("T0 first break", "65.37", "Sec. 3.3.3", ("shear",), lambda r: first_break_time(r["shear"]), "l/c_r"),
-    Claim("T0 nucleation site and direction", "x/l = 0, toward x/l = 1", "Sec. 3.3, Fig. 6b",
-          ("shear",), lambda r: _directions(r["shear"])),
-    Claim("T0 front speed past x_tip/l = 0.2", "~1 (0.7-1, lattice discreteness), never supershear",
-          "Sec. 3.3.2, Fig. 6c", ("shear",), lambda r: crack_speed(r["shear"]), "c_r"),
-    Claim("T0 kind of front", "crack (re-attachment only after it crossed)", "Sec. 3.3.1",
-          ("shear",), lambda r: _kinds(r["shear"])),
-    Claim("slip per front, T- / T0", "1.25 (\"almost 25% larger\" in the pulse case)", "Sec. 3.4",
-          ("push", "shear"), lambda r: median_slip(r["push"]) / median_slip(r["shear"])),
-]
-
-
-def comparison(runs: dict) -> list[dict]:
-    """One row per claim: quantity, units, the paper's value, parslip's, the source; 'not run' when a run is missing."""
-    rows = []
-    for c in CLAIMS:
-        missing = [k for k in c.needs if k not in runs]
-        if missing:
-            measured = f"not run ({', '.join(missing)})"
-        else:
-            try:
-                measured = _fmt(c.measure(runs))
-            except (IndexError, ValueError, ZeroDivisionError) as e:   # too few fronts in the run
-                measured = f"n/a ({type(e).__name__})"
-        rows.append({"quantity": c.quantity, "units": c.units, "paper": c.paper, "parslip": measured,
-                     "source": c.source})
-    return rows
-
-
-def markdown(rows: list[dict]) -> str:
-    """The comparison as a Markdown table."""
-    out = ["| quantity | units | paper | parslip | where in the paper |", "| --- | --- | --- | --- | --- |"]
-    for r in rows:
-        cells = [str(r[k]).replace("|", "\\|") for k in ("quantity", "units", "paper", "parslip", "source")]
-        out.append("| " + " | ".join(cells) + " |")
-    return "\n".join(out) + "\n"
-
-
-# --- tests of the disagreements ------------------------------------------------------
-
-def _unit_factor(unit: str) -> float:
-    """c_ref / c_r for a reading of the paper's velocity unit: the classical Rayleigh speed (1), the
-    Born lattice's own surface wave, or the shear speed; plane strain, nu = 0.2 as in every scene."""
-    from ..model import physics
-    r = physics.cl_over_cs(0.2, "plane_strain")
-    c_r = physics.rayleigh_ratio(r)
-    if unit == "born":
-        kn, kt = physics.born_stiffness(r, 1.0)
-        return physics.born_surface_ratio(kn, kt) / c_r
-    return {"c_r": 1.0, "c_s": 1.0 / c_r}[unit]
-
-
-@dataclass(frozen=True)
-class Variation:
-    """A run that tests one likely reason for one disagreement with the paper.
-
-    ``sets`` (``--set`` items) change every run in ``roles`` (or, when empty,
-    nothing: an analysis variation reads the baseline runs); ``measure`` reads
-    the quantity from a dict of runs by role, the same way for the baseline and
-    the variation; ``baseline`` (default ``measure``) reads the baseline.
-    """
-    name: str                       # slug, in the run files' names
-    disagreement: str
-    reason: str
-    roles: tuple[str, ...]
-    sets: tuple[str, ...]
-    measure: Callable[[dict], object]
-    units: str = ""
-    paper: str = ""
-    baseline: Callable[[dict], object] | None = None
-
-
-def _scaled_first_break(unit: str):
-    """The T0 first break read in l/c_ref, for a run driven at 1e-4 c_ref (c_ref from ``_unit_factor``)."""
-    return lambda r: first_break_time(r["shear"]) * _unit_factor(unit)
-
-
-def _v0_in(unit: str) -> str:
-    return f"drive.v0={float(1e-4 * _unit_factor(unit))!r}"
-
-
-_T0_BREAK = "T0 first break 70.0 vs the paper's 65.37 l/c_r"
-_T0_KIND = "T0 front: a wide pulse, not a crack"
-_RATIO = "T+ / T- pulse speed 0.89 vs the paper's 0.5"
-_WIDTH = "T- pulse width ~4 a vs the paper's ~1 a"
-
-VARIATIONS: list[Variation] = [
-    Variation("bottom200", _T0_BREAK, "substrate 200 columns (the methods text) instead of 300 (the captions)",
-              ("shear",), ("lattice.bottom_cols=200",), lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
-    Variation("units_born", _T0_BREAK, "velocity unit = the Born lattice's own surface wave (0.9475 c_s): "
-              "v0 = 1e-4 of it, times read in l over it", ("shear",), (_v0_in("born"),),
-              _scaled_first_break("born"), "l/c_ref", "65.37", baseline=lambda r: first_break_time(r["shear"])),
-    Variation("units_cs", _T0_BREAK, "velocity unit = c_s: v0 = 1e-4 c_s, times read in l/c_s",
-              ("shear",), (_v0_in("c_s"),), _scaled_first_break("c_s"), "l/c_ref", "65.37",
-              baseline=lambda r: first_break_time(r["shear"])),
-    Variation("zeta0", _T0_BREAK, "no damping (zeta = 0)", ("shear",), ("time.zeta=0.0",),
-              lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
-    Variation("zeta0.05", _T0_BREAK, "damping zeta halved (0.05)", ("shear",), ("time.zeta=0.05",),
-              lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
-    Variation("zeta0.2", _T0_BREAK, "damping zeta doubled (0.2)", ("shear",), ("time.zeta=0.2",),
-              lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
-    Variation("fn_per_node", _T0_BREAK, "F_N = 1 on every node of SR (total 100) instead of 1 in all",
-              ("shear",), ("load.FN=100.0",), lambda r: first_break_time(r["shear"]), "l/c_r", "65.37"),
-    Variation("plane_stress", _T0_BREAK, "nu = 0.2 read as plane stress (c_l/c_s = sqrt(2/(1-nu))), not plane strain",
-              ("shear",), ('material.model="plane_stress"',), lambda r: first_break_time(r["shear"]), "l/c_r",
-              "65.37"),
-    Variation("reform_zero", _T0_BREAK, "a re-formed bond's rest offset 0 instead of its offset when it forms",
-              ("shear",), ('interface.reform_x0="zero"',), lambda r: first_break_time(r["shear"]), "l/c_r",
-              "65.37"),
-    Variation("rigid", _T0_BREAK, "a rigid substrate (k_n -> infinity: 'comparatively rigid')",
-              ("shear",), ('lattice.substrate="rigid"',), lambda r: first_break_time(r["shear"]), "l/c_r",
-              "65.37"),
-    Variation("fine_cadence", _T0_KIND, "interface cadence 0.25 a/c_r instead of 1 a/c_r",
-              ("shear",), ("output.interface_dt=0.0025",), lambda r: far_edge_width(r["shear"]), "a",
-              "100 (crack: all bonds broken when it reaches x/l = 1)"),
-    Variation("zeta0", _T0_KIND, "no damping (zeta = 0)", ("shear",), ("time.zeta=0.0",),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("zeta0.01", _T0_KIND, "damping zeta / 10 (0.01)", ("shear",), ("time.zeta=0.01",),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("zeta0.05", _T0_KIND, "damping zeta halved (0.05)", ("shear",), ("time.zeta=0.05",),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("zeta0.2", _T0_KIND, "damping zeta doubled (0.2)", ("shear",), ("time.zeta=0.2",),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("bottom200", _T0_KIND, "substrate 200 columns", ("shear",), ("lattice.bottom_cols=200",),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("rigid", _T0_KIND, "a rigid substrate", ("shear",), ('lattice.substrate="rigid"',),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("fn_per_node", _T0_KIND, "F_N = 1 per node (total 100)", ("shear",), ("load.FN=100.0",),
-              lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("plane_stress", _T0_KIND, "nu = 0.2 read as plane stress", ("shear",),
-              ('material.model="plane_stress"',), lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("reform_zero", _T0_KIND, "a re-formed bond's rest offset 0", ("shear",),
-              ('interface.reform_x0="zero"',), lambda r: far_edge_width(r["shear"]), "a", "100"),
-    Variation("mean_speed", _RATIO, "speed read as each pulse's mean over its whole run, not its steady stretch",
-              ("push", "pull"), (), lambda r: speed_ratio(r["pull"], r["push"], how="mean"), "", "0.5",
-              baseline=lambda r: speed_ratio(r["pull"], r["push"])),
-    Variation("bottom200", _RATIO, "substrate 200 columns", ("push", "pull"), ("lattice.bottom_cols=200",),
-              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
-    Variation("zeta0.2", _RATIO, "damping zeta doubled (0.2)", ("push", "pull"), ("time.zeta=0.2",),
-              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
-    Variation("fn_per_node", _RATIO, "F_N = 1 per node (total 100): more compression at the nucleation site",
-              ("push", "pull"), ("load.FN=100.0",), lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
-    Variation("fn2", _RATIO, "F_N doubled (2 in all)", ("push", "pull"), ("load.FN=2.0",),
-              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
-    Variation("plane_stress", _RATIO, "nu = 0.2 read as plane stress", ("push", "pull"),
-              ('material.model="plane_stress"',), lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
-    Variation("reform_zero", _RATIO, "a re-formed bond's rest offset 0 (pre-stressed) instead of its offset "
-              "when it forms", ("push", "pull"), ('interface.reform_x0="zero"',),
-              lambda r: speed_ratio(r["pull"], r["push"]), "", "0.5"),
-    Variation("section_t30", _WIDTH, "width read as the paper does: white runs in the section t c_r/l = 30",
-              ("push",), (), lambda r: section_width(r["push"], 30.0), "a", "~1",
-              baseline=lambda r: steady_width(r["push"])),
-    Variation("fine_cadence", _WIDTH, "interface cadence 0.25 a/c_r instead of 1 a/c_r", ("push",),
-              ("output.interface_dt=0.0025",), lambda r: steady_width(r["push"]), "a", "~1"),
-    Variation("zeta0.2", _WIDTH, "damping zeta doubled (0.2)", ("push",), ("time.zeta=0.2",),
-              lambda r: steady_width(r["push"]), "a", "~1"),
-    Variation("fn_per_node", _WIDTH, "F_N = 1 per node (total 100)", ("push",), ("load.FN=100.0",),
-              lambda r: steady_width(r["push"]), "a", "~1"),
-    Variation("bottom200", _WIDTH, "substrate 200 columns", ("push",), ("lattice.bottom_cols=200",),
-              lambda r: steady_width(r["push"]), "a", "~1"),
-    Variation("reform_zero", _WIDTH, "a re-formed bond's rest offset 0 instead of its offset when it forms",
-              ("push",), ('interface.reform_x0="zero"',), lambda r: steady_width(r["push"]), "a", "~1"),
-    Variation("zeta0", _WIDTH, "no damping (zeta = 0)", ("push",), ("time.zeta=0.0",),
-              lambda r: steady_width(r["push"]), "a", "~1"),
-    Variation("plane_stress", _WIDTH, "nu = 0.2 read as plane stress", ("push",),
-              ('material.model="plane_stress"',), lambda r: steady_width(r["push"]), "a", "~1"),
-]
-
-
-def _measure(fn, runs: dict) -> str:
-    try:
-        return _fmt(fn(runs))
-    except (IndexError, ValueError, ZeroDivisionError, KeyError) as e:      # too few fronts, a failed run
-        return f"n/a ({type(e).__name__})"
-
-
-def variation_path(run_dir: str, v: Variation, role: str) -> str:
-    return os.path.join(run_dir, "variations", f"{role}__{v.name}.vtkhdf")
-
-
-def run_variations(runs: dict, run_dir: str, scene_dir: str = "run", run_missing: bool = False,
-                    ranks: int = 1, variations=None) -> list[dict]:
-    """Each variation's quantity for the baseline runs and for the varied ones (made with ``run_missing``
-    as ``run_dir/variations/<role>__<name>.vtkhdf``; a run made once serves every variation that shares
-    its name and role).  Rows: disagreement, reason, change, units, paper, baseline, varied."""
-    from .results import open as open_run
-    rows = []
-    for v in variations or VARIATIONS:
-        if any(role not in runs for role in v.roles):
-            continue
-        varied, failed = dict(runs), ""
-        for role in (v.roles if v.sets else ()):
-            path = variation_path(run_dir, v, role)
-            if not os.path.exists(path) and run_missing:
-                os.makedirs(os.path.dirname(path), exist_ok=True)
-                log.info(f"variation {v.name}: {role} with {' '.join(v.sets)}")
-                code = run_scene(os.path.join(scene_dir, SCENES[role]), path, ranks, v.sets)
-                if code != 0:
-                    failed = f"run failed (exit {code})"
-            if os.path.exists(path) and not failed:
-                varied[role] = open_run(path)
-            else:
-                failed = failed or "not run"
-        rows.append({"disagreement": v.disagreement, "reason": v.reason,
-                     "change": " ".join(v.sets) or "(analysis only)", "units": v.units, "paper": v.paper,
-                     "baseline": _measure(v.baseline or v.measure, runs),
-                     "varied": failed or _measure(v.measure, varied)})
-    return rows
-
-
-def variations_markdown(rows: list[dict]) -> str:
-    """The variations as a Markdown table."""
-    keys = ("disagreement", "reason", "change", "units", "paper", "baseline", "varied")
-    out = ["| disagreement | reason tested | change | units | paper | parslip | with the change |",
-           "| --- | --- | --- | --- | --- | --- | --- |"]
-    for r in rows:
-        out.append("| " + " | ".join(str(r[k]).replace("|", "\\|") for k in keys) + " |")
-    return "\n".join(out) + "\n"
-
-
-# --- the runs -----------------------------------------------------------------------
-
-SCENES = {                  # role -> scene file under run/
-    "push": "push.toml", "pull": "pull.toml", "shear": "shear.toml",
-    "push_v0_1e-2": "push_v0_1e-2.toml", "push_v0_1e-4": "push_v0_1e-4.toml",
-    "shear_maps": "shear.toml",
-}
-# Roles that are a scene with overrides.  shear_maps: the T0 rupture crosses the contact in about
-# 1.5 l/c_r, and the shear scene's snapshots are 4 l/c_r apart; this run stops at 72 l/c_r with a
-# snapshot every 0.5 l/c_r (about 200 MB), for the stress maps of Fig. 7a.
-ROLE_SETS = {"shear_maps": ("drive.duration=72.0", "output.snapshots=144")}
-MAPS_ONLY = {"shear_maps": "shear"}     # role -> the role whose stress maps it draws (no figure set of its own)
-
-
-def run_scene(scene: str, out: str, ranks: int = 1, sets=()) -> int:
-    """``parslip run scene --out out`` in a subprocess (under mpiexec for ranks > 1); returns its exit code."""
-    from ..parallel.launcher import python_command
-    sets = [x for s in sets for x in ("--set", s)]
-    cmd = python_command("parslip", "run", scene, "--out", out, "--overwrite", "--quiet", *sets,
-                         ranks=ranks if ranks > 1 else None)
-    return subprocess.run(cmd).returncode
-
-
-def reproduce(run_dir: str, out_dir: str, scene_dir: str = "run", run_missing: bool = False,
-              ranks: int = 1, roles=None, variations: bool = False) -> dict:
-    """Find (or, with ``run_missing``, make) each role's run as ``run_dir/<role>.vtkhdf``, then write each
-    run's figure set under ``out_dir/<role>/``, the v0-sweep and push/pull comparisons and
-    ``out_dir/comparison.md``; with ``variations``, also the runs that test each disagreement's likely
-    reason (``VARIATIONS``) and ``out_dir/variations.md``.  Returns the runs found."""
-    from . import figures
-    from .results import open as open_run
-
-    os.makedirs(out_dir, exist_ok=True)
-    runs = {}
-    for role in roles or SCENES:
-        path = os.path.join(run_dir, f"{role}.vtkhdf")
-        if not os.path.exists(path) and run_missing:
-            log.info(f"running {role}: {SCENES[role]} -> {path}")
-            if run_scene(os.path.join(scene_dir, SCENES[role]), path, ranks, ROLE_SETS.get(role, ())) != 0:
-                log.warning(f"{role}: the run failed; left out")
-                continue
-        if os.path.exists(path):
-            runs[role] = open_run(path)
-        else:
-            log.info(f"{role}: no {path}; left out (pass --run to make it)")
-    for role, run in runs.items():
-        if role not in MAPS_ONLY:
-            figures.write_all(run, os.path.join(out_dir, role))
-    for role, of in MAPS_ONLY.items():       # denser snapshots of the same scene, at the times its run asks for
-        if role in runs and of in runs:
-            figures.fig_stress_maps(runs[role], os.path.join(out_dir, of), times=figures.map_times(runs[of]))
-    sweep = [runs[k] for k in ("push_v0_1e-2", "push", "push_v0_1e-4") if k in runs]
-    if len(sweep) > 1:
-        figures.compare_speeds(sweep, out_dir, scale="v0", name="v0_sweep")
-    if "push" in runs and "pull" in runs:
-        figures.compare_speeds([runs["push"], runs["pull"]], out_dir, n=2, scale="c_r", name="push_vs_pull")
-    with open(os.path.join(out_dir, "comparison.md"), "w") as fh:
-        fh.write(markdown(comparison(runs)))
-    if variations:
-        rows = run_variations(runs, run_dir, scene_dir, run_missing, ranks)
-        with open(os.path.join(out_dir, "variations.md"), "w") as fh:
-            fh.write(variations_markdown(rows))
-    return runs
+def v_over_v0_spread(runs: list) -> float:
+    """max/min over runs at different v0 of (mean steady speed / v0): 1 when v is proportional to v0."""
+    vals = [mean_steady_speed(r) / r.v0 for r in runs]
+    if len(vals) < 2 or not all(math.isfinite(v) and v > 0 for v in vals):
+        return math.nan
+    return max(vals) / min(vals)

@@ -20,8 +20,8 @@ import sys
 from ..errors import EXIT_BAD_INPUT, ConfigError
 from ..scene.schema import describe_keys
 
-UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_s of the top
-block (or c_r with material.velocity_unit = "c_r"); scene times, like the
+UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_r of the top
+block (or c_s with material.velocity_unit = "c_s"); scene times, like the
 output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
 `parslip keys` lists every scene key with its default, units and range."""
 
@@ -29,7 +29,8 @@ output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
 # Further subcommands live in their own modules: each has ``register(sub)``,
 # which adds its parser with ``set_defaults(func=...)``; ``func(args)`` returns
 # the exit code.  Their heavy imports stay inside ``func``.
-COMMAND_MODULES = ("parslip.cli.analysis_cmds", "parslip.cli.viz_cmds", "parslip.cli.bench_cmds")
+COMMAND_MODULES = ("parslip.cli.analysis_cmds", "parslip.cli.viz_cmds", "parslip.cli.bench_cmds",
+                   "parslip.cli.paper_cmds")
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -68,7 +68,8 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive step curso
 Diag = namedtuple("Diag", "flags gflags timers beat")
 # Scalars of one run (``Simulation.params``):
 #   n_ramp, n_drive_start   steps of the F_N ramp, and the first drive step
-#   drive                   the scene has a drive (mode != none)
+#   drive                   0 no drive; DRIVE_X the driven face's x is prescribed; DRIVE_XY its y is also
+#                           held where it was when the drive started (``drive.hold = "xy"``)
 #   frame_every, n_frames   interface frame cadence (steps) and frames in this run
 #   frame_offset            index in the file of this run's frame 0 (a restart may change the cadence)
 #   check_every             steps between checks and agreements of the flags
@@ -78,6 +79,8 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   cf, inv_cf, damped      C = dt^2/(1 + zeta dt/2) in the state's float type, 1/C, zeta > 0
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
                               "rigid brow dt v0 fext jump cf inv_cf damped")
+
+DRIVE_X, DRIVE_XY = 1, 2
 
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)
@@ -114,11 +117,14 @@ def _flag(flags, bit, step, block, row, col, value):
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _drive(px, r, j, drive, shift, inv_cf):
-    """Set driven node (r, j) to its prescribed x; keep the force that took: (x_drive - x_free) / C."""
+def _drive(cy, px, py, r, j, drive, drive_on, shift, inv_cf):
+    """Set driven node (r, j) to its prescribed x; keep the force that took: (x_drive - x_free) / C.
+    With DRIVE_XY its y stays where it was (u_y(n+1) = u_y(n): held since the drive started)."""
     target = drive.drive0[r, j] + shift
     drive.force[drive.index[r, j]] = (target - px[r, j]) * inv_cf
     px[r, j] = target
+    if drive_on == DRIVE_XY:
+        py[r, j] = cy[r, j]
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
@@ -141,7 +147,7 @@ def _rows(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, driv
                      zeros, zero, g)
         if tk.drive and drive_on:
             for j in range(j0, j0 + n):
-                _drive(nxt_x, r, j, drive, shift, prm.inv_cf)
+                _drive(cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm.inv_cf)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
@@ -160,7 +166,7 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, drive, dri
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
             node_masked(cur_x, cur_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy)
         if tk.drive and drive_on:
-            _drive(nxt_x, r, j, drive, shift, prm.inv_cf)
+            _drive(cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm.inv_cf)
 
 
 @njit(cache=True, _nrt=False)
@@ -174,12 +180,12 @@ def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, 
     # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
     if pb[NODES] > pb[ROWS]:
         _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y,
-              iface.zeros, drive, False, shift, gy)
+              iface.zeros, drive, 0, shift, gy)
     if phase == LATE:
         exchange(PROGRESS, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, iface.counters)
     if pb[END] > pb[NODES]:
         _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, drive,
-               False, shift, gy)
+               0, shift, gy)
     if pt[NODES] > pt[ROWS]:
         _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y,
               iface.zeros, drive, drive_on, shift, gy)
@@ -244,7 +250,7 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
 def _step(n, cur, nxt, plan, sched, K, prm, iface, drive, diag):
     """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1)."""
     n_ds = prm.n_drive_start
-    drive_on = prm.drive and n >= n_ds
+    drive_on = prm.drive if n >= n_ds else 0         # DRIVE_X or DRIVE_XY once the drive runs
     if prm.drive and n == n_ds:
         d0 = drive.drive0
         for r in range(d0.shape[0]):
@@ -304,7 +310,7 @@ def _record(n, cur, prm, iface, drive, frames, tm):
     if prm.has_iface:
         ik.record(cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
     # The drive's force in the step that ended here (0 before the drive's first step).
-    on = prm.drive and n > prm.n_drive_start
+    on = prm.drive != 0 and n > prm.n_drive_start
     for i in range(drive.force.shape[0]):
         frames.fdrive[slot, i] = drive.force[i] if on else 0.0
     frames.step[slot] = n

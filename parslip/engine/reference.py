@@ -44,6 +44,9 @@ class Simulation:
         s, lat, mat = setup.scene, setup.lattice, setup.material
         if lat.rigid:
             raise NotImplementedError("the reference implementation has no rigid substrate")
+        for key, default in (("drive.hold", "x"), ("interface.rebond", "nearest"), ("interface.rebond_within", 0.0)):
+            if s.get(key, default) != default:
+                raise NotImplementedError(f"the reference implementation has only {key} = {default!r}")
         self.layout = lay = _SerialLayout(lat)
         nodes = lay.nodes
         n_loc, n_own = len(nodes["gid"]), lay.n_owned

@@ -49,7 +49,8 @@ class Simulation:
         cf = st.dt * st.dt / (1.0 + 0.5 * zeta * st.dt)
         lat = st.lattice
         self.params = L.Params(
-            n_ramp=st.n_ramp, n_drive_start=st.n_drive_start, drive=sc["drive.mode"] != "none",
+            n_ramp=st.n_ramp, n_drive_start=st.n_drive_start,
+            drive=0 if sc["drive.mode"] == "none" else L.DRIVE_XY if sc["drive.hold"] == "xy" else L.DRIVE_X,
             frame_every=st.frame_every, n_frames=st.n_frames, frame_offset=0, check_every=CHECK_EVERY,
             has_iface=bool(lat.has_interface), rigid=bool(lat.rigid),
             brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),

@@ -15,6 +15,7 @@ import numpy as np
 from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
+from ..scene.derive import rebond_within
 from .kernels import interface as ik
 from .loop import Drive, Levels
 
@@ -89,10 +90,12 @@ class State:
             consts = ik.Constants(delta0=dt.type(sc["interface.delta0"]), delta_b=dt.type(sc["interface.delta_b"]),
                                   kx=dt.type(sc["interface.kx"]), ky=dt.type(sc["interface.ky"]),
                                   reform_zero=sc["interface.reform_x0"] == "zero", drift=dt.type(reach.drift),
-                                  inv_l=dt.type(1.0 / setup.l), traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)))
+                                  inv_l=dt.type(1.0 / setup.l), traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)),
+                                  rebond=dt.type(rebond_within(sc)),
+                                  facing=sc.get("interface.rebond", "nearest") == "facing")
         else:
             geom = ik.Geometry(*([0] * len(ik.Geometry._fields)))
-            consts = ik.Constants(*([dt.type(0)] * 4), False, *([dt.type(0)] * 3))
+            consts = ik.Constants(*([dt.type(0)] * 4), False, *([dt.type(0)] * 4), False)
         geom = ik.Geometry(*(int(v) for v in geom))
         self.iface = ik.Iface(partner=partner, x0=np.zeros(wt, dt), claim=np.zeros(wt, np.int64),
                               taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),

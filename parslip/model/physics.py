@@ -6,8 +6,9 @@ back from the stiffnesses, the classical Rayleigh speed used to normalise
 results, and the lattice's own surface-wave speed.
 
 Units: lattice spacing a = 1, node mass m = 1, and velocities in units of
-c_ref, which is the top block's shear speed c_s (default) or its Rayleigh
-speed c_r (``material.velocity_unit = "c_r"``).  Time is then in a/c_ref and
+c_ref, which is the top block's Rayleigh speed c_r (default, the paper's
+Sec. 2 normalisation) or its shear speed c_s (``material.velocity_unit =
+"c_s"``).  Time is then in a/c_ref and
 stiffness in m c_ref^2 / a^2.  The mass density of the triangular lattice is
 rho = m / (sqrt(3)/2 a^2) = 2/sqrt(3).
 """
@@ -141,14 +142,26 @@ class Material:
 
     @classmethod
     def from_scene(cls, nu: float, model: str, velocity_unit: str,
-                   kn_bottom: float, kt_bottom: float) -> "Material":
+                   kn_bottom: float, kt_bottom: float, kn_spring: str = "along") -> "Material":
+        """``kn_spring`` 'along' (Eq. 2.1) or 'across' (the text near Fig. 1): with 'across' the k_n and
+        k_t of Eq. 2.2 (and the substrate's) go to the other spring, so ``kn_*`` (the lattice's stretch
+        stiffness) gets k_t's value and ``kt_*`` gets k_n's.  c_s, c_l, c_r stay those of nu: the units
+        the paper reports in, which that lattice then no longer has."""
         r = cl_over_cs(nu, model)
         xi = rayleigh_ratio(r)
         c_s = 1.0 if velocity_unit == "c_s" else 1.0 / xi
         c_l = r * c_s
         kn, kt = born_stiffness(c_l, c_s)
+        if kn_spring == "across":
+            kn, kt, kn_bottom, kt_bottom = kt, kn, kt_bottom, kn_bottom
+        elif kn_spring != "along":
+            raise ValueError(kn_spring)
+        try:
+            c_born = born_surface_ratio(kn, kt) * c_s
+        except ValueError:          # the swapped springs of 'across' have no surface wave below their c_s
+            c_born = math.nan
         return cls(nu=nu, model=model, velocity_unit=velocity_unit, c_s=c_s, c_l=c_l,
-                   c_r=xi * c_s, c_surface_born=born_surface_ratio(kn, kt) * c_s,
+                   c_r=xi * c_s, c_surface_born=c_born,
                    kn_top=kn, kt_top=kt, kn_bottom=kn_bottom, kt_bottom=kt_bottom)
 
     @property

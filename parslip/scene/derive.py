@@ -89,11 +89,18 @@ def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float,
     return value
 
 
+def rebond_within(scene: dict) -> float:
+    """Largest length (a) at which a free top node re-bonds: ``interface.rebond_within``, 0 meaning delta0."""
+    w = scene.get("interface.rebond_within", 0.0)
+    return w if w > 0 else scene["interface.delta0"]
+
+
 def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt or a drive the
     engine would take for a blow-up (``limits.check_setup``)."""
     mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
-                              scene["material.bottom_kn"], scene["material.bottom_kt"])
+                              scene["material.bottom_kn"], scene["material.bottom_kt"],
+                              scene.get("material.kn_spring", "along"))
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     if omega is None:
@@ -122,7 +129,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
-               slip_reach=reach, reach=interface_reach(scene["interface.delta0"], scene["interface.delta_b"], reach),
+               slip_reach=reach, reach=interface_reach(rebond_within(scene), scene["interface.delta_b"], reach),
                precision=scene["time.precision"])
     limits.check_setup(st)
     return st

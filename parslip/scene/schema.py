@@ -56,8 +56,14 @@ SCHEMA: dict[str, Key] = {
                        _range(-1.0, 1.0 / 3.0, lo_open=True), "Poisson ratio of the top block"),
     "material.model": Key("plane_strain", str, "-", "'plane_strain' or 'plane_stress'",
                           _choice("plane_strain", "plane_stress"), "how nu maps to c_l/c_s"),
-    "material.velocity_unit": Key("c_s", str, "-", "'c_s' or 'c_r'", _choice("c_s", "c_r"),
-                                  "internal velocity unit: top-block shear speed or Rayleigh speed"),
+    "material.velocity_unit": Key("c_r", str, "-", "'c_r' or 'c_s'", _choice("c_s", "c_r"),
+                                  "the velocity the stiffnesses are made dimensionless with (a = m = 1): the "
+                                  "top block's shear speed c_s, or its Rayleigh speed c_r (the paper's Sec. 2 "
+                                  "normalises velocities by c_r); sets k_n, k_t against the fixed k_x, k_y and F_N"),
+    "material.kn_spring": Key("along", str, "-", "'along' or 'across'", _choice("along", "across"),
+                              "which Born spring the k_n of Eq. 2.2 (and material.bottom_kn) is: 'along' the "
+                              "bond (Eq. 2.1: k_n resists its stretch, k_t its transverse motion) or 'across' "
+                              "it (the text near Fig. 1: k_n perpendicular, k_t along; the two swap)"),
     "material.bottom_kn": Key(100.0, float, "m c^2/a^2", "> 0", _range(0.0, lo_open=True),
                               "normal bond stiffness of the substrate"),
     "material.bottom_kt": Key(0.0, float, "m c^2/a^2", ">= 0", _range(0.0),
@@ -70,8 +76,15 @@ SCHEMA: dict[str, Key] = {
                             "unloaded gap; a free top node re-bonds within this distance"),
     "interface.delta_b": Key(0.7, float, "a", "> delta0", _range(0.0, lo_open=True),
                              "bond length at which an interface bond breaks"),
-    "interface.reform_x0": Key("current", str, "-", "'current' or 'zero'", _choice("current", "zero"),
-                               "rest offset of a re-formed bond: its offset when it forms, or 0"),
+    "interface.reform_x0": Key("zero", str, "-", "'zero' or 'current'", _choice("current", "zero"),
+                               "rest offset x_ij^0 of a re-formed bond (Eq. 2.3): 0, that of two facing nodes, "
+                               "as for the bonds of the initial state; or its offset when it forms (it starts "
+                               "unstressed in x)"),
+    "interface.rebond": Key("nearest", str, "-", "'nearest' or 'facing'", _choice("nearest", "facing"),
+                            "which substrate node a free top node re-bonds to: the nearest free one within "
+                            "interface.rebond_within, or only the one facing it (the nearest column)"),
+    "interface.rebond_within": Key(0.0, float, "a", ">= 0 (0 = auto: delta0, the paper's delta_new <= delta0)",
+                                   _range(0.0), "largest bond length at which a free top node re-bonds"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
                                 "largest interface slip the MPI halo must reach across"),
     # load and drive -------------------------------------------------------------
@@ -81,6 +94,9 @@ SCHEMA: dict[str, Key] = {
     "load.settle": Key(4.0, float, "l/c_r", ">= 0", _range(0.0), "damped settling time at full F_N"),
     "drive.mode": Key("push", str, "-", "'push' (T-), 'pull' (T+), 'shear' (T0) or 'none'",
                       _choice("push", "pull", "shear", "none"), "which face is driven"),
+    "drive.hold": Key("x", str, "-", "'x' or 'xy'", _choice("x", "xy"),
+                      "what the drive prescribes on the driven face: x only (y free), or x and y (y held at "
+                      "its value when the drive starts)"),
     "drive.v0": Key(1e-3, float, "c_r", "> 0", _range(0.0, lo_open=True), "drive velocity"),
     "drive.duration": Key(100.0, float, "l/c_r", "> 0", _range(0.0, lo_open=True),
                           "simulated drive time after settling"),

@@ -13,7 +13,8 @@ and the opposite force on the bottom node.  Each step, at positions u(t):
 1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b;
 2. each free top site claims the nearest free bottom site within delta0
    (ties: lower bottom index), looking at the substrate columns within
-   ``window`` of its nearest one;
+   ``window`` of its nearest one (``rebond`` replaces delta0 here; with
+   ``facing`` it looks at the nearest column only);
 3. claims are granted in increasing top-site order, so when two free top
    sites reach the same bottom site the lower global index wins and the
    other waits a step; a re-formed bond takes x0 = x_ij then (starts
@@ -47,10 +48,12 @@ BREAKS, FORMS = 0, 1
 #   tcover, bcover   reach (a) the halo must cover beyond this rank's interest (``layout.Reach``)
 Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow window tfirst tlast "
                                   "bcols rigid tcover bcover")
-# The interface constants, in the state's float type (a bool for the re-bonding rule):
+# The interface constants, in the state's float type (bools for the re-bonding rules):
 #   delta0, delta_b (a); kx, ky (m c^2/a^2); reform_zero: a re-formed bond starts with x0 = 0;
-#   drift (a) a substrate site may move from its column; inv_l = 1/l; traction = 1/(a rho c_r^2)
-Constants = namedtuple("Constants", "delta0 delta_b kx ky reform_zero drift inv_l traction")
+#   drift (a) a substrate site may move from its column; inv_l = 1/l; traction = 1/(a rho c_r^2);
+#   rebond (a) the largest length at which a free site re-bonds (delta0 unless interface.rebond_within);
+#   facing: re-bond only to the facing substrate site (the nearest column), not the nearest free one
+Constants = namedtuple("Constants", "delta0 delta_b kx ky reform_zero drift inv_l traction rebond facing")
 # The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
 # the substrate's (bottom sites): partner (global substrate column, -1 broken) and rest offset x0 of each
 # bond; claim and taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom
@@ -84,7 +87,9 @@ def update(tx, ty, bx, by, it):
     bbase, blo, bhi, bcols, w = g.bbase, g.blo, g.bhi, g.bcols, g.window
     bown0, bown1 = g.bown0, g.bown1
     d0, db, kx, ky = p.delta0, p.delta_b, p.kx, p.ky
-    db2, d02 = db * db, d0 * d0
+    db2, d02 = db * db, p.rebond * p.rebond
+    if p.facing:
+        w = 0
     zero = like(0, d0)
     for i in range(blo, bhi):
         taken[i] = 0
