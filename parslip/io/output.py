@@ -532,7 +532,11 @@ def _one_line(e: BaseException) -> str:
 
 
 def _ordered_sum(values: np.ndarray) -> np.ndarray:
-    """Each row's sum in index order, one addition at a time (an accumulate, not NumPy's pairwise sum)."""
+    """Each row's sum in index order, one addition at a time, ((v0 + v1) + v2) + ...: the documented order,
+    not NumPy's pairwise sum; vectorised over the rows (frames), site by site."""
     if values.shape[1] == 0:
         return np.zeros(values.shape[0])
-    return np.cumsum(values, axis=1)[:, -1].copy()
+    total = values[:, 0].copy()
+    for j in range(1, values.shape[1]):
+        total += values[:, j]
+    return total

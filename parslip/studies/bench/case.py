@@ -104,7 +104,8 @@ def main():
                                                           (L.T_POST, "post"), (L.T_LATE, "other_tasks"),
                                                           (L.T_COMPLETE, "complete"))}
     phases["checks"] = tm[L.T_CHECK] / steps / 1e3
-    phases["frames"] = tm[L.T_FRAMES] / steps / 1e3
+    frames = writer.frames                  # frames recorded over the timed steps, one in TIME_EVERY of them timed
+    phases["frames"] = tm[L.T_FRAMES] / max(tm[L.T_FRAME_SAMPLES], 1) * frames / steps / 1e3
     allphases = comm.gather(phases)
     rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
     events = comm.reduce(sim.counters - c0)
