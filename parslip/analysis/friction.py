@@ -45,7 +45,10 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
                   included: |x_arrest - x_nucleation| + 1/sites (l).  For a front from an edge, the
                   distance from that edge to where it stopped.
   rupture kind    of the run: the kind ("pulse" or "crack", ``fronts.Front.kind``) of the first front
-                  that crossed the contact; "none" when no front did.
+                  that crossed the contact.  When none crossed but the contact slipped everywhere all the
+                  same (a fast rupture the detector saw in pieces, or fronts that shared the contact
+                  out), the kind of the fronts that nucleated up to the slip onset, "mixed" if they
+                  differ; "none" when the contact never slipped everywhere and no front crossed.
   mean speed      of a front, (x_last - x_first)/(t_last - t_first) (``Front.mean_speed``); the table
                   gives |mean speed| of the first crossing front and the mean |mean speed| of all fronts.
   slip per event  the mean over the fronts of the slip each carries (``Front.slip_u``, the median over
@@ -228,11 +231,22 @@ def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = N
         "n_running": fates.count("running"),
         "precursor_arrest_mean": float(np.mean(arrests)) if arrests else nan,
         "precursor_arrest_max": float(np.max(arrests)) if arrests else nan,
-        "rupture_kind": crossed[0].kind if crossed else "none",
+        "rupture_kind": rupture_kind(fr, fates, pk.slip_onset),
         "front_speed": abs(crossed[0].mean_speed) if crossed else nan,
         "front_speed_mean": float(np.mean(speeds)) if speeds else nan,
         "slip_per_event": float(np.mean(slips)) if slips else nan,
     }
+
+
+def rupture_kind(fr: list[Front], fates: list[str], t_slip: float | None) -> str:
+    """"pulse", "crack", "mixed" or "none" (the module's definition)."""
+    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+    if crossed:
+        return crossed[0].kind
+    if t_slip is None:
+        return "none"
+    kinds = {f.kind for f in fr if f.nucleation_time <= t_slip}
+    return kinds.pop() if len(kinds) == 1 else "mixed" if kinds else "none"
 
 
 # Units of the observables' columns, for tables and headers.
