@@ -56,6 +56,9 @@ def register(sub) -> None:
                    help="wall-clock time (HH:MM:SS or seconds) after which no point starts and running ones stop "
                         "with a checkpoint; run the sweep again to continue")
     s.add_argument("--retry-failed", action="store_true", help="run the points recorded failed again")
+    s.add_argument("--reanalyse", action="store_true",
+                   help="compute the finished points' observables again from their files (after a change to "
+                        "parslip.analysis), then write the summary")
     s.add_argument("--quiet", action="store_true", help="no line per point")
     s.set_defaults(func=cmd_sweep, mpi=True)
 
@@ -101,7 +104,7 @@ def cmd_sweep(args) -> int:
     echo = (lambda line: None) if args.quiet else (lambda line: print(f"parslip {rank}/{size}: {line}",
                                                                        file=sys.stderr, flush=True))
     res = run_sweep(args.sweep, args.out, comm, shard=_shard(args.shard), stop_after=stop_after,
-                    echo=echo, retry_failed=args.retry_failed)
+                    echo=echo, retry_failed=args.retry_failed, reanalyse=args.reanalyse)
     if rank == 0:
         pending = sum(r["status"] == "pending" for r in res.rows)
         failed = sum(r["status"].startswith("failed") for r in res.rows)

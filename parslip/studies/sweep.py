@@ -437,12 +437,13 @@ class SweepResult:
 
 
 def run_sweep(path: str, outdir: str, comm=None, *, shard: tuple[int, int] = (0, 1), stop_after: float | None = None,
-              retry_failed: bool = False, echo=None) -> SweepResult:
+              retry_failed: bool = False, reanalyse: bool = False, echo=None) -> SweepResult:
     """Run the points of sweep file ``path`` still to run into ``outdir`` on every rank of ``comm`` (None:
     this process alone, no MPI); then (world rank 0) write the summary.  ``shard`` = (I, N): only the
     points dealt to shard I of N (a job array task).  ``stop_after``: wall seconds after which no point
-    starts and the running ones stop with a checkpoint.  ``echo(line)`` reports progress (rank 0 of each
-    group); every rank must call this alike."""
+    starts and the running ones stop with a checkpoint.  ``reanalyse``: compute the finished points'
+    observables again from their files (after a change to ``analysis``).  ``echo(line)`` reports progress
+    (rank 0 of each group); every rank must call this alike."""
     from ..analysis.table import require_netcdf
     rank = comm.Get_rank() if comm is not None else 0
     size = comm.Get_size() if comm is not None else 1
@@ -529,6 +530,13 @@ def run_sweep(path: str, outdir: str, comm=None, *, shard: tuple[int, int] = (0,
         counts = [sum(c) for c in zip(*comm.allgather(mine))]
         res.ran, res.ok, res.failed, res.stopped, res.interrupted = counts[:4] + [bool(counts[4])]
     if rank == 0:
+        if reanalyse:
+            mine = {sw.points[i].name for i in deal([cost(sw, p) for p in sw.points], sn)[si]}
+            for p in sw.points:
+                rec = read_record(outdir, p)
+                if p.name in mine and rec and rec.get("status") == "ok":
+                    _finish_record(rec, out_path(outdir, p))
+                    write_record(outdir, p, rec)
         res.rows = summary_rows(sw, outdir)
         res.summary = write_summary(sw, outdir, res.rows)
     return res
