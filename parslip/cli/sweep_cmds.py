@@ -59,6 +59,8 @@ def register(sub) -> None:
     s.add_argument("--reanalyse", action="store_true",
                    help="compute the finished points' observables again from their files (after a change to "
                         "parslip.analysis), then write the summary")
+    s.add_argument("--dry-run", action="store_true",
+                   help="check the sweep file and print its points and what is left to run; run nothing")
     s.add_argument("--quiet", action="store_true", help="no line per point")
     s.set_defaults(func=cmd_sweep, mpi=True)
 
@@ -97,6 +99,8 @@ def cmd_sweep(args) -> int:
     import logging
 
     comm = args.comm
+    if args.dry_run:
+        return _dry_run(args)
     rank = comm.Get_rank() if comm is not None else 0
     size = comm.Get_size() if comm is not None else 1
     setup_logging(rank, size, level=logging.WARNING)      # the points' own warnings; their progress is ours
@@ -115,6 +119,24 @@ def cmd_sweep(args) -> int:
         if res.stopped:
             print(f"parslip: sweep stopped with checkpoints; continue with the same command", file=sys.stderr)
     return EXIT_INTERRUPTED if res.interrupted else 0
+
+
+def _dry_run(args) -> int:
+    """The points, their status on disk and the shard's share, without running or writing anything."""
+    from ..studies import sweep as S
+    from ..analysis.table import require_netcdf
+    require_netcdf()
+    sw = S.load_sweep(args.sweep)
+    si, sn = _shard(args.shard)
+    mine = {sw.points[i].name for i in S.deal([S.cost(sw, p) for p in sw.points], sn)[si]}
+    print(f"{args.sweep}: base {sw.base}, {len(sw.points)} points over {', '.join(sw.swept) or '(nothing)'}, "
+          f"ranks_per_point {sw.ranks_per_point}" + (f"; shard {si}/{sn} holds {len(mine)} (*)" if sn > 1 else ""))
+    for p in sw.points:
+        rec = S.read_record(args.out, p) if os.path.isdir(args.out) else None
+        status = (rec or {}).get("status", "pending")
+        here = "*" if sn > 1 and p.name in mine else " "
+        print(f"  {p.name}{here} {status[:40]:40s} {p.label()}")
+    return 0
 
 
 def cmd_map(args) -> int:
