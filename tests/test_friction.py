@@ -82,7 +82,7 @@ def _record(crack=True, edge=True):
     nf = 400
     it = blank(nf)
     arr = {"p1": draw(it, 20, 0, +1, 2, 2, 0.001, sites=10),
-           "p2": draw(it, 80, 0, +1, 2, 2, 0.001, sites=25),
+           "p2": draw(it, 90, 0, +1, 2, 2, 0.001, sites=25),
            "p3": draw(it, 40, NS - 1, -1, 2, 2, 0.001, sites=12)}
     if edge:
         arr["edge"] = draw(it, 140, 30, +1, 1, 2, 0.001)
@@ -132,10 +132,10 @@ def test_fates_and_precursors_with_their_arrest_lengths():
     it, arr = _record()
     fr = FR.front_catalogue(it)
     got = {(round(f.nucleation_time / DT), FR.fate(f, it)) for f in fr}
-    assert got == {(20, "arrested"), (80, "arrested"), (40, "arrested"), (140, "edge"), (200, "crossed"),
+    assert got == {(20, "arrested"), (90, "arrested"), (40, "arrested"), (140, "edge"), (200, "crossed"),
                    (385, "running")}
     pre = FR.precursors(it, fr)
-    assert [(round(p.nucleation_time / DT), p.kind) for p in pre] == [(20, "pulse"), (40, "pulse"), (80, "pulse")]
+    assert [(round(p.nucleation_time / DT), p.kind) for p in pre] == [(20, "pulse"), (40, "pulse"), (90, "pulse")]
     x = it["x"]
     for p, sites, tip, last in zip(pre, (10, 12, 25), (9, NS - 12, 24), (arr["p1"], arr["p3"], arr["p2"])):
         assert p.arrest_length == pytest.approx(sites / NS, rel=1e-12)
@@ -148,6 +148,23 @@ def test_fates_and_precursors_with_their_arrest_lengths():
     assert obs["precursor_arrest_mean"] == pytest.approx((10 + 12 + 25) / 3 / NS)
     assert obs["front_speed"] == pytest.approx((1 / NS) / DT)          # the crack: one site per frame
     assert obs["mu_s"] == pytest.approx(2.0) and obs["mu_s_place"] == "after"
+
+
+def test_a_pulse_finished_by_an_edge_burst_crossed_and_the_burst_merged():
+    """As under pull: a slow pulse from x = 1 reaches site 6 at frame 169 while the last six bonds at
+    x = 0 break from the edge toward it (frames 166-171).  The detector sees two fronts; the pulse
+    crossed (the rest of the contact broke as it arrived), the burst ran into the pulse: neither is
+    a precursor."""
+    it = blank(400)
+    draw(it, 10, NS - 1, -1, 3, 2, 0.001, sites=NS - 6)
+    draw(it, 166, 0, +1, 1, 1, 0.001, sites=6, crack=True)
+    it["intact"][200:] = 1
+    fr = FR.front_catalogue(it)
+    assert [(f.direction, f.sites) for f in fr] == [(-1, NS - 6), (1, 6)]
+    assert [FR.fate(f, it) for f in fr] == ["crossed", "merged"]
+    assert FR.precursors(it, fr) == []
+    it["mu"] = np.zeros(400)
+    assert FR.observables(it)["rupture_kind"] == "pulse" and FR.slip_onset(it) == 171
 
 
 def test_a_front_still_moving_when_the_record_ends_is_not_a_precursor():

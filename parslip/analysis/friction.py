@@ -14,10 +14,11 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
   slip onset      t_slip, the first frame by which every interface bond has broken at least once since
                   the drive began: the whole contact has then slipped, by one front crossing it or by
                   several that share it out.  Tribologists call this the onset of (macroscopic) sliding:
-                  the block as a whole has moved on its substrate.  The ``EDGE_SITES`` bonds at each end
-                  are left out, as they are when a front counts as crossing: a corner bond at a free edge
-                  may hold while the rest of the contact slips (on a 24-site contact pushed from the
-                  rear, the front edge's bond never breaks while pulse after pulse arrives next to it).
+                  the block as a whole has moved on its substrate.  The ``edge_sites`` bonds at each end
+                  (2 % of the contact, at least one) are left out, as they are when a front counts as
+                  crossing: the bonds at a free corner may hold while the rest of the contact slips (on
+                  a 24-site contact pushed from the rear the front edge's bond never breaks while pulse
+                  after pulse arrives next to it; on 100 sites pulses stop 2 sites short).
   static peak     mu_s = max mu(t) over 0 <= t <= t_slip: the largest tangential load the interface
                   held before it had slipped everywhere, as experiments define static friction (the
                   peak shear force before the first slip event that spans the contact; Rubinstein et
@@ -31,14 +32,22 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
   place           where the peak sits relative to the first break (the first frame with any broken
                   bond, ``fronts.first_break``): t_s - t_fb, "before", "at" (within one frame) or
                   "after" it; mu at the first break is kept too.
-  fate            of a front, from its tip trajectory (``tip_x``: the sites it reached):
+  fate            of a front, from its tip trajectory (the sites it reached) and the bonds ahead of it,
+                  the first rule that holds:
                     crossed   it broke bonds from one edge of the contact to the other (it nucleated
-                              within ``EDGE_SITES`` sites of one edge and reached the other);
-                    edge      it reached the far edge in its direction from inside the contact;
-                    arrested  its tip stopped inside the contact: it had not advanced for longer than
-                              the detector's patience (``max_gap``) before the record ended;
-                    running   it had not reached the far edge but advanced within ``max_gap`` of the
-                              record's end: it may still be moving, so it is not counted as arrested.
+                              within ``edge_sites`` sites of one edge and reached the other), or it
+                              nucleated at an edge and every bond between its last site and the far
+                              edge broke within ``max_gap`` of its last advance: it met another front
+                              that finished the crossing (a pulse from the driven edge that sets off
+                              the last few bonds at the far edge at once, seen under pull);
+                    edge      the same from a nucleation inside the contact: it reached the far edge;
+                    merged    the bond just ahead of its tip was broken when it last advanced or broke
+                              within ``max_gap``: it ran into another front's broken zone;
+                    arrested  its tip stopped inside the contact with the bond ahead holding, and it did
+                              not advance for longer than the detector's patience (``max_gap``) before
+                              the record ended;
+                    running   as arrested but within ``max_gap`` of the record's end: it may still be
+                              moving, so it is not counted as arrested.
   precursor       a front that arrested: a rupture that did not cross the contact (Rubinstein et al.
                   2007), with its arrest time (its tip's last advance), arrest site and
   arrest length   the length of contact it broke, from its nucleation site to its arrest site, both
@@ -63,8 +72,13 @@ import numpy as np
 
 from .fronts import Front, first_break, fronts as front_catalogue
 
-EDGE_SITES = 1          # a tip within this many sites of an edge of the contact has reached it
-FATES = ("crossed", "edge", "arrested", "running")
+EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one site) of an edge has reached it
+
+
+def edge_sites(ns: int) -> int:
+    """Sites at each end of a contact of ``ns`` sites that count as its edge: 2 %, at least one."""
+    return max(1, int(round(EDGE_FRACTION * ns)))
+FATES = ("crossed", "edge", "merged", "arrested", "running")
 
 
 @dataclass
@@ -118,10 +132,11 @@ def mu(iface: dict) -> np.ndarray:
 
 
 def slip_onset(iface: dict) -> int | None:
-    """The first frame by which every interface bond but the ``EDGE_SITES`` at each end has broken at
+    """The first frame by which every interface bond but the ``edge_sites`` at each end has broken at
     least once, or None."""
     intact = iface["intact"]
-    inner = intact[:, EDGE_SITES:intact.shape[1] - EDGE_SITES]
+    e = edge_sites(intact.shape[1])
+    inner = intact[:, e:intact.shape[1] - e]
     if inner.shape[1] == 0 or inner.shape[0] == 0:
         return None
     ever = np.logical_or.accumulate(inner == 0, axis=0).all(axis=1)
@@ -164,20 +179,33 @@ def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
 
 
 def fate(front: Front, iface: dict, max_gap: float = 3.0) -> str:
-    """What became of a front: "crossed", "edge", "arrested" or "running" (module docstring)."""
-    x = iface["x"]
+    """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring)."""
+    x, t = iface["x"], iface["t"]
     ns = len(x)
     dx = 1.0 / ns
-    tol = (EDGE_SITES + 0.5) * dx
+    e = edge_sites(ns)
+    tol = (e + 0.5) * dx
     xs = front.tip["x"]
     lo, hi = float(xs.min()), float(xs.max())
     at_rear, at_front = lo <= x[0] + tol, hi >= x[-1] - tol
     if at_rear and at_front:            # a chain grows from its nucleation run to its tip: edge to edge
         return "crossed"
-    if (front.direction > 0 and at_front) or (front.direction < 0 and at_rear):
+    d = front.direction
+    if (d > 0 and at_front) or (d < 0 and at_rear):
         return "edge"
-    t_end = float(iface["t"][-1])
-    return "running" if t_end - front.t_end <= max_gap else "arrested"
+    if d != 0:
+        near = at_rear if d > 0 else at_front
+        tip = int(np.argmin(np.abs(x - front.x_far)))
+        k0 = int(np.searchsorted(t, front.t_end - max_gap))
+        k_end = int(np.searchsorted(t, front.t_end))
+        k1 = int(np.searchsorted(t, front.t_end + max_gap, side="right"))
+        broken = iface["intact"][k0:k1] == 0
+        ahead = np.arange(tip + d, ns - e if d > 0 else e - 1, d)
+        if len(ahead) and broken[:, ahead].any(axis=0).all():
+            return "crossed" if near else "edge"
+        if 0 <= tip + d < ns and broken[k_end - k0:, tip + d].any():
+            return "merged"
+    return "running" if float(t[-1]) - front.t_end <= max_gap else "arrested"
 
 
 def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = 3.0) -> list[Precursor]:
@@ -200,7 +228,7 @@ def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = N
     Keys and units: first_break_time (l/c_r), first_break_x (l), mu_first_break, mu_s, mu_s_time (l/c_r),
     mu_s_after_first_break (l/c_r), mu_s_place, mu_s_window, slip_onset_time (l/c_r), F_s (m c^2/a),
     mu_sliding (mean mu after the slip onset), n_fronts, n_pulse, n_crack, n_crossed, n_precursors,
-    n_running, precursor_arrest_mean, precursor_arrest_max (l), rupture_kind, front_speed (|mean speed|
+    n_running, n_merged, precursor_arrest_mean, precursor_arrest_max (l), rupture_kind, front_speed (|mean speed|
     of the first crossing front, c_r), front_speed_mean (mean |mean speed| of all fronts, c_r),
     slip_per_event (l).  Missing values are NaN (numbers) or "" (words).
     """
@@ -228,7 +256,7 @@ def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = N
         "mu_sliding": float(np.nanmean(sliding)) if len(sliding) and np.any(np.isfinite(sliding)) else nan,
         "n_fronts": len(fr), "n_pulse": sum(f.kind == "pulse" for f in fr),
         "n_crack": sum(f.kind == "crack" for f in fr), "n_crossed": len(crossed), "n_precursors": len(pre),
-        "n_running": fates.count("running"),
+        "n_running": fates.count("running"), "n_merged": fates.count("merged"),
         "precursor_arrest_mean": float(np.mean(arrests)) if arrests else nan,
         "precursor_arrest_max": float(np.max(arrests)) if arrests else nan,
         "rupture_kind": rupture_kind(fr, fates, pk.slip_onset),
@@ -253,7 +281,7 @@ def rupture_kind(fr: list[Front], fates: list[str], t_slip: float | None) -> str
 UNITS = {"first_break_time": "l/c_r", "first_break_x": "l", "mu_first_break": "-", "mu_s": "-",
          "mu_s_time": "l/c_r", "mu_s_after_first_break": "l/c_r", "mu_s_place": "-", "mu_s_window": "-",
          "slip_onset_time": "l/c_r", "F_s": "m c^2/a", "mu_sliding": "-", "n_fronts": "-", "n_pulse": "-",
-         "n_crack": "-", "n_crossed": "-", "n_precursors": "-", "n_running": "-", "precursor_arrest_mean": "l",
+         "n_crack": "-", "n_crossed": "-", "n_precursors": "-", "n_running": "-", "n_merged": "-", "precursor_arrest_mean": "l",
          "precursor_arrest_max": "l", "rupture_kind": "-", "front_speed": "c_r", "front_speed_mean": "c_r",
          "slip_per_event": "l"}
 

@@ -33,10 +33,10 @@ from .friction import UNITS
 
 OBSERVABLES = ("first_break_time", "first_break_x", "mu_s", "mu_s_time", "mu_s_after_first_break", "mu_s_place",
                "mu_s_window", "slip_onset_time", "mu_first_break", "F_s", "mu_sliding", "rupture_kind", "n_fronts",
-               "n_pulse", "n_crack", "n_crossed", "n_precursors", "n_running", "precursor_arrest_mean",
+               "n_pulse", "n_crack", "n_crossed", "n_precursors", "n_running", "n_merged", "precursor_arrest_mean",
                "precursor_arrest_max", "front_speed", "front_speed_mean", "slip_per_event")
 TAIL = ("wall_s", "out", "scene", "commit")
-INTEGER = {"n_fronts", "n_pulse", "n_crack", "n_crossed", "n_precursors", "n_running"}
+INTEGER = {"n_fronts", "n_pulse", "n_crack", "n_crossed", "n_precursors", "n_running", "n_merged"}
 WORDS = {"point", "status", "mu_s_place", "mu_s_window", "rupture_kind", "out", "scene", "commit"}
 DESCRIPTIONS = {
     "point": "the point's name: p + its index in the sweep file's order",
@@ -48,7 +48,7 @@ DESCRIPTIONS = {
     "mu_s_after_first_break": "mu_s_time - first_break_time",
     "mu_s_place": "the peak before, at (within a frame) or after the first break",
     "mu_s_window": "slip onset: the peak of a contact that slipped everywhere; record: a lower bound",
-    "slip_onset_time": "first time by which every interface bond (but one at each end) broke at least once",
+    "slip_onset_time": "first time by which every interface bond (but 2 % at each end) broke at least once",
     "mu_first_break": "mu at the first break",
     "F_s": "static friction force mu_s F_N",
     "mu_sliding": "mean mu after the slip onset",
@@ -57,6 +57,7 @@ DESCRIPTIONS = {
     "n_fronts": "rupture fronts detected", "n_pulse": "fronts that were pulses", "n_crack": "fronts that were cracks",
     "n_crossed": "fronts that crossed the contact edge to edge", "n_precursors": "fronts that arrested inside it",
     "n_running": "fronts still moving at the record's end",
+    "n_merged": "fronts that ran into another front's broken zone",
     "precursor_arrest_mean": "mean arrest length of the precursors", "precursor_arrest_max": "largest one",
     "front_speed": "|mean speed| of the first front that crossed the contact",
     "front_speed_mean": "mean |mean speed| of all fronts",

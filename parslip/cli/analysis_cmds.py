@@ -66,9 +66,11 @@ Per front: nucleation time (l/c_r) and site (x/l), direction (+1 toward x/l = 1)
 kind (pulse: bonds re-attach behind the tip while it is inside the contact; else
 crack), mean and maximum speed (signed, c_r), where it accelerates (x/l), width
 (lattice spacings a), slip u and v it carries (l), the tip trajectory, and its
-fate: crossed (edge to edge), edge (left through the far edge from inside),
-arrested (a precursor: its tip stopped inside the contact; with its arrest
-length, l) or running (still moving when the record ended).
+fate: crossed (edge to edge, alone or finished by a front it met), edge (left
+through the far edge from inside), merged (ran into another front's broken zone),
+arrested (a precursor: its tip stopped inside the contact with the bond ahead
+holding; with its arrest length, l) or running (still moving when the record
+ended).
 Then the friction record: the first break, the slip onset (every bond broken
 once), the static peak mu_s = max -F_T/F_N up to the slip onset, its time and
 its place relative to the first break, and the precursors."""
