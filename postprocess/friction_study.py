@@ -3,11 +3,11 @@
     for s in loading rate stiffness_push stiffness_shear; do
         mpiexec -n 2 parslip sweep run/studies/friction_$s.toml -o out/friction/$s
     done
-    python postprocess/friction_study.py --dir out/friction -o docs/studies/img
+    python postprocess/friction_study.py --dir out/friction -o docs/studies/img --tables docs/studies
 
 Writes into OUT: the maps (parslip map) of mu_s and of the rupture kind over F_N and the loading, and
 over F_N and k_x; F_s(F_N) per loading with its straight-line fit; mu(t) of three points; and the
-summary tables as CSV (friction_<sweep>.csv).  Prints the Markdown tables the page quotes.
+summary tables as CSV (friction_<sweep>.csv, in --tables).  Prints the Markdown tables the page quotes.
 """
 import argparse
 import math
@@ -52,18 +52,20 @@ def fs_figure(tab, out):
         fs = [r["F_s"] for r in ok]
         ax.plot(fn, fs, "o", color=c, label=f"{mode}")
         ax.plot([r["load.FN"] for r in bound], [r["F_s"] for r in bound], "^", mfc="none", color=c)
-        if len(fn) >= 2:
-            f0, mu = fit(fn, fs)
+        low = [(a, b) for a, b in zip(fn, fs) if a <= 2.0]
+        if len(low) >= 2:
+            f0, mu = fit(*zip(*low))
             xx = np.linspace(0, 4.2, 50)
             ax.plot(xx, f0 + mu * xx, "--", color=c, lw=0.8)
-            lines.append((mode, f0, mu, len(fn)))
+            lines.append((mode, f0, mu, len(low)))
     ax.plot([], [], "^", mfc="none", color="0.4", label="lower bound (no slip onset in the record)")
     ax.set_xlabel("F_N  (m c^2/a)")
     ax.set_ylabel("F_s = mu_s F_N  (m c^2/a)")
     ax.set_xlim(0, 4.3)
     ax.set_ylim(0, None)
     ax.legend(fontsize=7)
-    ax.set_title("static friction force against normal load, v0/c_r = 1e-3; dashed: F_0 + mu_i F_N", fontsize=8)
+    ax.set_title("static friction force against normal load, v0/c_r = 1e-3;\ndashed: F_0 + mu_i F_N fitted "
+                 "over F_N <= 2", fontsize=8)
     save(fig, out, "friction_Fs_FN")
     os.remove(os.path.join(out, "friction_Fs_FN.pdf"))
     return lines
@@ -87,14 +89,15 @@ def md_table(rs, cols, fmt=None):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--dir", required=True, help="directory holding the sweeps' OUTDIRs (loading, rate, ...)")
-    p.add_argument("-o", "--out", required=True, help="directory for the pictures and CSV tables")
+    p.add_argument("-o", "--out", required=True, help="directory for the pictures")
+    p.add_argument("--tables", help="directory for the summary tables, friction_<sweep>.csv (default: --out)")
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     tabs = {}
     for s in SWEEPS:
         path = os.path.join(a.dir, s, "summary.csv")
         tabs[s] = table.read(path)
-        shutil.copy(path, os.path.join(a.out, f"friction_{s}.csv"))
+        shutil.copy(path, os.path.join(a.tables or a.out, f"friction_{s}.csv"))
     L = tabs["loading"]
     for color in ("mu_s", "F_s", "n_precursors"):
         maps.draw_map(L, "load.FN", "drive.mode", color, os.path.join(a.out, f"map_loading_{color}.png"),
@@ -119,7 +122,7 @@ def main():
             "precursor_arrest_mean", "precursor_arrest_max", "front_speed", "slip_per_event", "wall_s"]
     print("## loading\n")
     print(md_table(rows(L), cols, {"wall_s": "{:.1f}"}))
-    print("\nF_s = F_0 + mu_i F_N fits (points with a slip onset):")
+    print("\nF_s = F_0 + mu_i F_N fits (F_N <= 2, all with a slip onset):")
     for mode, f0, mu, n in lines:
         print(f"  {mode}: F_0 = {f0:.3f}, mu_i = {mu:.3f} ({n} points)")
     print("\n## rate\n")

@@ -281,7 +281,8 @@ def rupture_kind(fr: list[Front], fates: list[str], t_slip: float | None) -> str
 UNITS = {"first_break_time": "l/c_r", "first_break_x": "l", "mu_first_break": "-", "mu_s": "-",
          "mu_s_time": "l/c_r", "mu_s_after_first_break": "l/c_r", "mu_s_place": "-", "mu_s_window": "-",
          "slip_onset_time": "l/c_r", "F_s": "m c^2/a", "mu_sliding": "-", "n_fronts": "-", "n_pulse": "-",
-         "n_crack": "-", "n_crossed": "-", "n_precursors": "-", "n_running": "-", "n_merged": "-", "precursor_arrest_mean": "l",
+         "n_crack": "-", "n_crossed": "-", "n_precursors": "-", "n_running": "-", "n_merged": "-",
+         "precursor_arrest_mean": "l",
          "precursor_arrest_max": "l", "rupture_kind": "-", "front_speed": "c_r", "front_speed_mean": "c_r",
          "slip_per_event": "l"}
 

@@ -14,8 +14,9 @@ over 0.6-1.3 (equal cost: the same steps and nodes), snapshots off, driven for
 ``duration`` l/c_r (100 by default, as in run/studies/friction_loading.toml).
 Each process pays about 2 s that no rank count shares out (Python, imports,
 numba's cached kernels, the summary), so the ratio reaches 0.5 only for long
-points: with 8 points of T s each it is about (2 + 4 T) / (2 + 8 T).  A one-point sweep first warms the cache.  Each repeat
-runs both, alternating which goes first; medians are reported with every
+points: with 8 points of T s each it is about (2 + 4 T) / (2 + 8 T).  A
+one-point sweep first warms the cache.  Each repeat runs both, alternating
+which goes first; medians are reported with every
 repeat, the CPU time the commands used (a 2-rank run that got both cores uses
 about twice its wall time), and the machine's load average before each run.
 
@@ -123,7 +124,8 @@ def main(argv=None) -> int:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--points", type=int, default=8)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--duration", type=float, default=100.0, help="drive time of each point, l/c_r (default 100: the loading study's points)")
+    ap.add_argument("--duration", type=float, default=100.0,
+                    help="drive time of each point, l/c_r (default 100: the loading study's points)")
     ap.add_argument("--scene", help="base scene (default run/push.toml)")
     ap.add_argument("--json", help="also write every measurement here")
     a = ap.parse_args(argv)
