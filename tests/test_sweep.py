@@ -111,7 +111,11 @@ def test_another_sweep_in_the_same_outdir_is_refused(here, capsys):
     b = _write(here / "b.toml", 'base = "tiny.toml"\n[grid]\n"drive.v0" = [0.03]\n')
     assert main(["sweep", a, "-o", "o", "--quiet"]) == 0
     assert main(["sweep", b, "-o", "o"]) == 2
-    assert "-o 'o': holds another sweep" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "-o 'o': holds another sweep" in err and "its points differ from this file's" in err
+    c = _write(here / "c.toml", 'base = "tiny.toml"\n[set]\n"drive.duration" = 2.0\n[grid]\n"drive.v0" = [0.02]\n')
+    assert main(["sweep", c, "-o", "o"]) == 2
+    assert "its set differ from this file's" in capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- running, one rank --

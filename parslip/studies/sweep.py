@@ -293,10 +293,11 @@ def prepare(sw: Sweep, outdir: str) -> None:
         os.remove(tmp)
     with open(path) as fh:
         have = json.load(fh)
-    if json.loads(json.dumps(want["points"], default=str)) != have.get("points"):
-        raise ConfigError(f"-o {outdir!r}: holds another sweep ({have.get('sweep')}, {len(have.get('points', []))} "
-                          f"points; this one has {len(sw.points)} other points); accepted: the same sweep file to "
-                          f"resume it, or a new -o")
+    want = json.loads(json.dumps(want, default=str))
+    differ = [k for k in ("base", "set", "points") if want[k] != have.get(k)]
+    if differ:
+        raise ConfigError(f"-o {outdir!r}: holds another sweep ({have.get('sweep')}: its {', '.join(differ)} "
+                          f"differ from this file's); accepted: the same sweep file to resume it, or a new -o")
 
 
 def triage(sw: Sweep, outdir: str, names: set | None = None, retry_failed: bool = False) -> tuple[list, list]:
