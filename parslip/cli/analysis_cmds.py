@@ -14,7 +14,8 @@ import os
 def register(sub) -> None:
     """Add this module's subcommands to the ``parslip`` parser."""
     raw = argparse.RawDescriptionHelpFormatter
-    f = sub.add_parser("fronts", help="rupture-front catalogue of a run (table, or JSON with --json)",
+    f = sub.add_parser("fronts", help="rupture-front catalogue and friction record (mu_s, precursors) of a run "
+                                      "(table, or JSON with --json)",
                        formatter_class=raw, description=FRONTS_HELP)
     f.add_argument("run", help="run file written by `parslip run` (.vtkhdf)")
     f.add_argument("--json", action="store_true",
