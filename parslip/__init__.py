@@ -5,7 +5,7 @@ The public facade, above every layer of the package:
     import parslip
     run = parslip.run("run/push.toml", out="out/push.vtkhdf")      # a run, as `parslip run` makes it
     run = parslip.open("out/push.vtkhdf")                            # a finished (or partial) run file
-    run.interface["ux"], run.times, run.fronts(), run.mu
+    run.interface["ux"], run.times, run.fronts(), run.mu, run.mu_s, run.precursors()
 
 ``import parslip`` loads neither numpy nor h5py nor MPI: each name is imported on first use.
 """

@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# --- Python: the package with its [mpich,test,viz,docs] extras ----------------------------------
+# --- Python: the package with its [mpich,test,viz,docs,sweep] extras ----------------------------
 install_python() {
     # An editable install that already exists (on a shared machine: another checkout's) is left
     # pointing where it points, and only the dependencies are installed: the suite imports this
@@ -23,14 +23,14 @@ except ImportError:                     # Python 3.10
     import tomli as tomllib
 p = tomllib.load(open("pyproject.toml", "rb"))["project"]
 reqs = list(p["dependencies"])
-for extra in ("mpich", "test", "viz", "docs"):
+for extra in ("mpich", "test", "viz", "docs", "sweep"):
     reqs += p["optional-dependencies"][extra]
 print("\n".join(reqs))
 EOF
         PIP_ROOT_USER_ACTION=ignore python -m pip install -q --disable-pip-version-check -r "$reqs"
         rm -f "$reqs"
     else
-        PIP_ROOT_USER_ACTION=ignore python -m pip install -q --disable-pip-version-check -e ".[mpich,test,viz,docs]"
+        PIP_ROOT_USER_ACTION=ignore python -m pip install -q --disable-pip-version-check -e ".[mpich,test,viz,docs,sweep]"
     fi
 }
 

@@ -132,11 +132,11 @@ def test_real_run_catalogue(small_run):
 
 def test_cli_json_fields(small_run, capsys):
     assert main(["fronts", small_run, "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["fronts"]
     fr = parslip.open(small_run).fronts()
     assert len(out) == len(fr)
     keys = {"nucleation_time", "nucleation_x", "direction", "kind", "mean_speed", "max_speed",
-            "width", "slip_u", "slip_v", "tip"}
+            "width", "slip_u", "slip_v", "tip", "fate", "arrest_length"}
     assert keys <= set(out[0]) and {"t", "x", "v"} <= set(out[0]["tip"])
     assert out[0]["tip"]["x"] == pytest.approx(list(fr[0].tip["x"]))
     assert main(["fronts", small_run]) == 0

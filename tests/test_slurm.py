@@ -147,3 +147,31 @@ def test_restart_chain_continues_to_the_end(cluster, tmp_path):
     assert got.keys() == want.keys()
     for name in want:
         assert got[name].tobytes() == want[name].tobytes(), name
+
+
+def test_sweep_as_a_job_array_of_shards(cluster):
+    """Two array tasks of 2 ranks each (one point per rank) share a 5-point sweep by shards: every point
+    runs once, in its own file, and the last task's summary holds all five; resubmitted, nothing reruns.
+    The kernels come from the checkout's batch cache (slurm/env.sh's default), compiled once for good."""
+    (cluster.dir / "sweep.toml").write_text('base = "tiny.toml"\n[set]\n"drive.duration" = 2.0\n'
+                                            '[grid]\n"load.FN" = [0.5, 1.0, 1.5, 2.0, 2.5]\n')
+    cluster.env["NUMBA_CACHE_DIR"] = str(REPO / ".numba-cache")
+    job = cluster.sbatch("--array=0-1", "--ntasks=2", SLURM / "sweep.sbatch", "sweep.toml")
+    out = cluster.out / "sweep"
+    ran = []
+    for i in (0, 1):
+        log = cluster.log(f"parslip-sweep-{job}_{i}.log")
+        assert f"array task {i}: shard {i}/2 of sweep.toml" in log, log
+        assert "to run on 2 rank(s) in 2 group(s) of 1" in log, log
+        ran.append({ln.split(": ")[2].split()[0] for ln in log.splitlines() if "sweep group" in ln})
+    assert not ran[0] & ran[1] and ran[0] | ran[1] == {f"p{k:03d}" for k in range(5)}, ran
+    rows = (out / "summary.csv").read_text().splitlines()
+    assert len(rows) == 6 and all(",ok," in r for r in rows[1:]), rows
+    for k in range(5):
+        assert _status(out / "points" / f"p{k:03d}.vtkhdf") == ("complete", 1)
+    again = cluster.sbatch("--array=0-1", "--ntasks=2", SLURM / "sweep.sbatch", "sweep.toml")
+    assert "this job ran 0:" in cluster.log(f"parslip-sweep-{again}_1.log")
+    # A bad sweep file stops the task before any rank starts, with its one line.
+    (cluster.dir / "bad.toml").write_text('base = "tiny.toml"\n[grid]\n"load.fn" = [1.0]\n')
+    bad = cluster.sbatch(SLURM / "sweep.sbatch", "bad.toml")
+    assert "unknown scene key (did you mean load.FN?)" in cluster.log(f"parslip-sweep-{bad}_None.log")

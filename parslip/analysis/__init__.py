@@ -1,4 +1,5 @@
-"""Reading runs back: rupture fronts, results object, figures, paper comparison, accuracy.  Never imports the engine."""
+"""Reading runs back: rupture fronts, friction observables (static peak, precursors), results object,
+figures, a sweep's summary table and its maps, paper comparison, accuracy.  Never imports the engine."""
 from .fronts import Front, break_events, first_break, fronts, load_interface, summary  # noqa: F401
 
 

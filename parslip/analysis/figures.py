@@ -1,6 +1,7 @@
 """The paper's figure set for one run (Sec. 3 and the appendices), with matplotlib (Agg).
 
-Responsible for drawing the figures from a ``parslip.open`` result and for
+Responsible for drawing the figures from a ``parslip.open`` result (and,
+beyond the paper, mu(t) with the front events: ``fig_friction``) and for
 the two small computations only they need: the interface-stress profile
 ahead of a tip and the Mode II square-root fit (appendix B).  Every figure is
 written as PNG and PDF; ``write_all`` writes the whole set for one run and
@@ -397,8 +398,68 @@ def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> lis
     return out
 
 
+# --- friction -----------------------------------------------------------------------
+
+FATE_MARKERS = {"crossed": "o", "edge": "s", "merged": "v", "arrested": "X", "running": ">"}
+
+
+def fig_friction(run, out_dir: str) -> list[str]:
+    """mu(t) = -F_T/F_N with the front events marked, above the fronts' tip trajectories x_tip(t).
+
+    Top: mu(t) (black), the drive's force over F_N (grey: it exceeds mu by the damping drag on the block),
+    the first break (dotted), the slip onset (dashed; ``analysis.friction``), the static peak mu_s (star)
+    and each front's nucleation on the curve, its marker telling its fate (o crossed, s left through an
+    edge, v merged with another front, X arrested: a precursor, > still running at the record's end).
+    Bottom: each front's tip x/l against t, in the same colours, its arrest marked X.
+    """
+    from .friction import fate
+    if "mu" not in run.interface:
+        log.info("friction figure skipped: the record holds no /interface/mu (written before parslip recorded "
+                 "the friction force)")
+        return []
+    plt = _plt()
+    t, mu = run.times, run.mu
+    fn = run.scene.get("load.FN") or float("nan")
+    pk = run.static_peak
+    fr = run.fronts()
+    fates = [fate(f, run.interface) for f in fr]
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": (3, 2)})
+    ax.plot(t, mu, color="k", lw=1, label=r"$\mu = -F_T/F_N$")
+    if fn > 0:
+        ax.plot(t, run.drive_force / fn, color="0.6", lw=0.7, label=r"$F_{drive}/F_N$")
+    if pk.first_break_time is not None:
+        for a in (ax, bx):
+            a.axvline(pk.first_break_time, color="tab:red", ls=":", lw=1)
+        ax.plot([], [], color="tab:red", ls=":", label=f"first break, t = {pk.first_break_time:.2f}")
+    if pk.slip_onset is not None:
+        for a in (ax, bx):
+            a.axvline(pk.slip_onset, color="tab:purple", ls="--", lw=1)
+        ax.plot([], [], color="tab:purple", ls="--", label=f"slip onset, t = {pk.slip_onset:.2f}")
+    if math.isfinite(pk.mu_s):
+        bound = "" if pk.window == "slip onset" else " (record: lower bound)"
+        ax.plot(pk.time, pk.mu_s, "*", color="gold", mec="k", ms=13, zorder=5,
+                label=f"$\\mu_s$ = {pk.mu_s:.3g} at t = {pk.time:.2f}{bound}")
+    for i, (f, w) in enumerate(zip(fr, fates)):
+        k = run.frame_at(f.nucleation_time)
+        ax.plot(t[k], mu[k], FATE_MARKERS[w], color=colour(i), ms=6, mec="k", mew=0.5, zorder=4)
+        bx.plot(f.tip["t"], f.tip["x"], color=colour(i), lw=1.2)
+        bx.plot(f.nucleation_time, f.nucleation_x, FATE_MARKERS[w], color=colour(i), ms=5, mec="k", mew=0.5)
+        if w == "arrested":
+            bx.plot(f.t_end, f.x_far, "X", color=colour(i), ms=8, mec="k", mew=0.5)
+    for w, m in FATE_MARKERS.items():
+        if w in fates:
+            ax.plot([], [], m, color="0.7", mec="k", mew=0.5, label=f"front nucleates ({w})")
+    ax.set_ylabel(r"$\mu$")
+    ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    ax.set_title(_title(run) + f", F_N = {fn:g}", fontsize=8)
+    bx.set_ylabel("x_tip / l")
+    bx.set_ylim(0, 1)
+    bx.set_xlabel("t c_r / l")
+    return save(fig, out_dir, "friction")
+
+
 FIGURES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "slip_records",
-           "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit")
+           "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit", "friction")
 
 
 def write_all(run, out_dir: str, only=None) -> list[str]:
@@ -408,6 +469,7 @@ def write_all(run, out_dir: str, only=None) -> list[str]:
         "stress_maps": fig_stress_maps, "slip_records": fig_slip_records,
         "slip_behind_tips": fig_slip_behind_tips, "slip_velocity": fig_slip_velocity,
         "pulse_width": fig_pulse_width, "mode2_fit": lambda r, d: fig_mode2(r, d)[0],
+        "friction": fig_friction,
     }
     paths = []
     for name in (only or FIGURES):

@@ -311,23 +311,33 @@ def fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5, window: int = 
     return out
 
 
-def table(fr: list[Front]) -> str:
-    """The catalogue as a readable table (units in the header)."""
+def table(fr: list[Front], fates: list[str] | None = None, arrest: dict | None = None) -> str:
+    """The catalogue as a readable table (units in the header); with ``fates`` (``analysis.friction.fate``)
+    a column of what became of each front, and ``arrest`` {front index: arrest length in l} for precursors."""
+    fates = fates or []
+    arrest = arrest or {}
+    extra = bool(fates)
     head = (f"{'#':>3} {'t_nuc':>8} {'x_nuc':>6} {'dir':>4} {'kind':>6} {'v_mean':>9} {'v_max':>9} "
-            f"{'accel_x':>7} {'width':>6} {'slip_u':>9} {'slip_v':>9} {'sites':>5}\n"
+            f"{'accel_x':>7} {'width':>6} {'slip_u':>9} {'slip_v':>9} {'sites':>5}"
+            + (f" {'fate':>8} {'arrest':>6}" if extra else "") + "\n"
             f"{'':>3} {'l/c_r':>8} {'l':>6} {'':>4} {'':>6} {'c_r':>9} {'c_r':>9} "
-            f"{'l':>7} {'a':>6} {'l':>9} {'l':>9} {'':>5}")
+            f"{'l':>7} {'a':>6} {'l':>9} {'l':>9} {'':>5}" + (f" {'':>8} {'l':>6}" if extra else ""))
     rows = [head]
     for i, f in enumerate(fr):
         acc = f"{f.accel_x:7.3f}" if f.accel_x is not None else f"{'-':>7}"
-        rows.append(f"{i + 1:>3} {f.nucleation_time:8.3f} {f.nucleation_x:6.3f} {f.direction:>+4d} {f.kind:>6} "
-                    f"{f.mean_speed:9.3g} {f.max_speed:9.3g} {acc} {f.width:6.1f} {f.slip_u:9.3g} "
-                    f"{f.slip_v:9.3g} {f.sites:5d}")
+        row = (f"{i + 1:>3} {f.nucleation_time:8.3f} {f.nucleation_x:6.3f} {f.direction:>+4d} {f.kind:>6} "
+               f"{f.mean_speed:9.3g} {f.max_speed:9.3g} {acc} {f.width:6.1f} {f.slip_u:9.3g} "
+               f"{f.slip_v:9.3g} {f.sites:5d}")
+        if extra:
+            row += f" {fates[i]:>8} " + (f"{arrest[i]:6.3f}" if i in arrest else f"{'-':>6}")
+        rows.append(row)
     return "\n".join(rows)
 
 
-def summary(iface: dict) -> str:
-    """First break and the front catalogue, as ``parslip run`` prints it."""
+def summary(iface: dict, fn: float | None = None) -> str:
+    """First break, the front catalogue with each front's fate, and the friction record (static peak,
+    slip onset, precursors: ``analysis.friction``), as ``parslip run`` prints it; ``fn`` is F_N."""
+    from .friction import fate, precursors, summary_lines
     tb, xb = first_break(iface)
     lines = []
     if tb is None:
@@ -337,5 +347,8 @@ def summary(iface: dict) -> str:
     fr = fronts(iface)
     lines.append(f"{len(fr)} rupture fronts")
     if fr:
-        lines.append(table(fr[:12]))
+        arrest = {p.index: p.arrest_length for p in precursors(iface, fr)}
+        lines.append(table(fr[:12], [fate(f, iface) for f in fr[:12]], arrest))
+    if "mu" in iface and len(iface["x"]):
+        lines += summary_lines(iface, fn, fr)
     return "\n".join(lines)

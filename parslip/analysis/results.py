@@ -2,7 +2,8 @@
 
 Responsible for what a notebook, a script or the figure code reads from a run:
 the interface record with its units, the snapshots as pyvista meshes, the
-rupture fronts, the resolved scene and the provenance.  All file access goes
+rupture fronts, the friction record (mu(t), the static peak mu_s, the
+precursors), the resolved scene and the provenance.  All file access goes
 through ``parslip.io.contract``; pyvista is imported only when a snapshot is
 asked for.
 
@@ -12,6 +13,7 @@ asked for.
     run.times                    # interface frame times, l/c_r
     mesh = run.snapshot_at(30.0) # pyvista UnstructuredGrid nearest t = 30 l/c_r
     [f.nucleation_time for f in run.fronts()]
+    run.mu, run.mu_s, run.static_peak, run.precursors()   # friction (analysis.friction)
 """
 from __future__ import annotations
 
@@ -157,6 +159,72 @@ class Run:
         if key not in cache:
             cache[key] = fronts(self.interface, **kw)
         return cache[key]
+
+
+    # --- friction (``analysis.friction``: the definitions) -----------------------
+    @property
+    def friction_force(self) -> np.ndarray:
+        """F_T per frame: the interface bonds' x-force on the block, m c^2/a (< 0 while it holds the block)."""
+        return self._force("friction_force")
+
+    @property
+    def drive_force(self) -> np.ndarray:
+        """Per frame, the x-force the drive applied to its driven nodes in the step ending there, m c^2/a."""
+        return self._force("drive_force")
+
+    @property
+    def mu(self) -> np.ndarray:
+        """mu(t) = -F_T / F_N per frame, the friction coefficient the interface mobilises."""
+        return self._force("mu")
+
+    def _force(self, name: str) -> np.ndarray:
+        if name not in self.interface:
+            raise ConfigError(f"{name}: {self.path} holds no /interface/{name} (written before parslip recorded "
+                              f"forces); accepted: a run file written by this parslip")
+        return self.interface[name]
+
+    @property
+    def first_break(self) -> tuple:
+        """(t, x): time of the first broken bond (l/c_r; None if none broke) and the x (l) of the bonds broken then."""
+        from .fronts import first_break
+        return first_break(self.interface)
+
+    @cached_property
+    def static_peak(self):
+        """``analysis.friction.StaticPeak``: mu_s, its time, its window and its place relative to the first break."""
+        from .friction import static_peak
+        self.mu                                     # a file without forces: one ConfigError line
+        return static_peak(self.interface, self._fn())
+
+    @property
+    def mu_s(self) -> float:
+        """The static peak of mu: max mu(t) before the contact had slipped everywhere (``static_peak``)."""
+        return self.static_peak.mu_s
+
+    @property
+    def slip_onset(self) -> float | None:
+        """t (l/c_r) by which every interface bond had broken at least once; None if that never happened."""
+        return self.static_peak.slip_onset
+
+    def fates(self, **kw) -> list[str]:
+        """What became of each front of ``fronts(**kw)``: "crossed", "edge", "arrested" or "running"."""
+        from .friction import fate
+        gap = kw.get("max_gap", 3.0)
+        return [fate(f, self.interface, gap) for f in self.fronts(**kw)]
+
+    def precursors(self, **kw) -> list:
+        """The fronts that arrested inside the contact (``analysis.friction.Precursor``: arrest time, site, length)."""
+        from .friction import precursors
+        return precursors(self.interface, self.fronts(**kw), kw.get("max_gap", 3.0))
+
+    def observables(self, **kw) -> dict:
+        """The run's friction and front observables as one flat row (``analysis.friction.observables``)."""
+        from .friction import observables
+        return observables(self.interface, self._fn(), self.fronts(**kw), kw.get("max_gap", 3.0))
+
+    def _fn(self) -> float | None:
+        fn = self.scene.get("load.FN")
+        return float(fn) if fn is not None else None
 
 
 def _nearest(values: np.ndarray, t: float, what: str) -> int:

@@ -14,10 +14,12 @@ import os
 def register(sub) -> None:
     """Add this module's subcommands to the ``parslip`` parser."""
     raw = argparse.RawDescriptionHelpFormatter
-    f = sub.add_parser("fronts", help="rupture-front catalogue of a run (table, or JSON with --json)",
+    f = sub.add_parser("fronts", help="rupture-front catalogue and friction record (mu_s, precursors) of a run "
+                                      "(table, or JSON with --json)",
                        formatter_class=raw, description=FRONTS_HELP)
     f.add_argument("run", help="run file written by `parslip run` (.vtkhdf)")
-    f.add_argument("--json", action="store_true", help="print a JSON list of fronts (fields in the README)")
+    f.add_argument("--json", action="store_true",
+                   help="print one JSON object: first break, static peak, precursors and the list of fronts")
     f.add_argument("--min-sites", type=int, default=5, help="drop fronts that broke fewer bonds (default 5)")
     f.add_argument("--max-gap", type=float, default=3.0,
                    help="longest pause of a tip whose bond re-attached, in l/c_r (default 3)")
@@ -64,11 +66,19 @@ FRONTS_HELP = """Detect every rupture front from /interface/intact and the inter
 Per front: nucleation time (l/c_r) and site (x/l), direction (+1 toward x/l = 1),
 kind (pulse: bonds re-attach behind the tip while it is inside the contact; else
 crack), mean and maximum speed (signed, c_r), where it accelerates (x/l), width
-(lattice spacings a), slip u and v it carries (l), and the tip trajectory."""
+(lattice spacings a), slip u and v it carries (l), the tip trajectory, and its
+fate: crossed (edge to edge, alone or finished by a front it met), edge (left
+through the far edge from inside), merged (ran into another front's broken zone),
+arrested (a precursor: its tip stopped inside the contact with the bond ahead
+holding; with its arrest length, l) or running (still moving when the record
+ended).
+Then the friction record: the first break, the slip onset (every bond broken
+once), the static peak mu_s = max -F_T/F_N up to the slip onset, its time and
+its place relative to the first break, and the precursors."""
 
 
 FIGURE_NAMES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "slip_records",
-                "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit")
+                "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit", "friction")
 
 FIGURES_HELP = """Write the figure set of the paper's Sec. 3 and appendices for one run:
 space-time diagram with the detected fronts (Figs. 2b/4b/6b), front speed v/c_r
@@ -76,7 +86,9 @@ against x_tip/l (2c/4c/6c), interface sigma_xy and sigma_yy (rho c_r^2) about th
 leading tip (3b-c/5b-c/7b-c), stress maps (3a/5a/7a/8, when parslip.analysis.render
 is present), u(t) at three points (10), Delta u and Delta v behind the tips (9),
 slip velocity (app. C), pulse width in a (app. A), Mode II fit K_II (rho c_r^2
-l^1/2) and x_p (l) (app. B, also as mode2_fit.csv)."""
+l^1/2) and x_p (l) (app. B, also as mode2_fit.csv); beyond the paper, friction:
+mu(t) = -F_T/F_N with the first break, the slip onset, the static peak mu_s and
+each front's nucleation and fate marked, above the fronts' tips x_tip(t)."""
 
 COMPARE_HELP = """Overlay the front speeds of several runs: v/v0 against x_tip/l for a v0 sweep
 (Fig. 2d), |v|/c_r against distance from the nucleation site for push against
@@ -117,14 +129,30 @@ def cmd_fronts(args) -> int:
     _positive("max-gap", args.max_gap, "accepted: a time > 0 in l/c_r")
     _positive("window", args.window, "accepted: an integer >= 1")
     run = open_run(args.run)
-    fr = run.fronts(max_gap=args.max_gap, min_sites=args.min_sites, window=args.window)
+    kw = dict(max_gap=args.max_gap, min_sites=args.min_sites, window=args.window)
+    fr = run.fronts(**kw)
+    fates = run.fates(**kw)
+    pre = run.precursors(**kw)
+    has_mu = "mu" in run.interface
     if args.json:
-        print(json.dumps([f.to_dict() for f in fr]))
-    else:
-        print(f"{args.run}: {run.mode}, v0/c_r = {run.v0:g}, {len(run.times)} frames x {len(run.x)} sites; "
-              f"{len(fr)} rupture fronts")
-        if fr:
-            print(table(fr))
+        arrest = {p.index: p.arrest_length for p in pre}
+        fronts = []
+        for i, (f, w) in enumerate(zip(fr, fates)):
+            d = f.to_dict()
+            d.update(fate=w, arrest_length=arrest.get(i))
+            fronts.append(d)
+        tb, xb = run.first_break
+        print(json.dumps({"run": args.run, "first_break": {"time": tb, "x": [float(v) for v in xb]},
+                          "static_peak": run.static_peak.to_dict() if has_mu else None,
+                          "precursors": [p.to_dict() for p in pre], "fronts": fronts}))
+        return 0
+    print(f"{args.run}: {run.mode}, v0/c_r = {run.v0:g}, {len(run.times)} frames x {len(run.x)} sites; "
+          f"{len(fr)} rupture fronts")
+    if fr:
+        print(table(fr, fates, {p.index: p.arrest_length for p in pre}))
+    if has_mu:
+        from ..analysis.friction import summary_lines
+        print("\n".join(summary_lines(run.interface, run.scene.get("load.FN"), fr, args.max_gap)))
     return 0
 
 

@@ -20,6 +20,11 @@ def register(sub) -> None:
                    help="instead: time per step at --sizes on --ranks, fit t_step = a N + b H + c (rank counts "
                         "above the machine's cores kept out of the fit), predict l = 2000 on 64 ranks "
                         "(parslip.studies.bench.scaling)")
+    b.add_argument("--sweep", action="store_true",
+                   help="instead: time an 8-point sweep of the push scene on 1 rank and on 2 (one point per rank), "
+                        "warm cache, --repeat times; prints the medians and their ratio "
+                        "(parslip.studies.sweep_bench; target <= 0.55)")
+    b.add_argument("--repeat", type=int, default=3, help="with --sweep: repeats of each rank count (default 3)")
     b.set_defaults(func=cmd_bench)
 
 
@@ -29,6 +34,14 @@ def cmd_bench(args) -> int:
     from ..studies.bench import suite
     if args.scaling:
         return _scaling(args)
+    if args.sweep:
+        from ..studies import sweep_bench
+        res = sweep_bench.measure(repeat=args.repeat, log=lambda m: print(m, file=sys.stderr, flush=True))
+        with open(args.json, "w") as f:
+            json.dump(res, f, indent=1)
+        print(sweep_bench.report(res))
+        print(f"\n(written to {args.json})")
+        return 0
     args.ranks = args.ranks or [1, 2]
     sizes = [s for s in args.sizes if not args.quick or s <= 500]
     seconds = 2.0 if args.quick else args.seconds

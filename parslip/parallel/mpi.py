@@ -71,5 +71,7 @@ def handles(comm, float_dtype) -> np.ndarray:
     """[H_COMM, H_FLOAT, H_INT64, H_MAX]: the communicator, the state's float datatype, MPI_INT64_T and
     MPI_MAX as the integers compiled code passes to MPI."""
     ftype = MPI.DOUBLE if np.dtype(float_dtype) == np.float64 else MPI.FLOAT
-    return np.array([MPI._handleof(comm), MPI._handleof(ftype), MPI._handleof(MPI.INT64_T),
-                     MPI._handleof(MPI.MAX)], HANDLE_DTYPE)
+    # mpi4py gives MPICH's int handles as unsigned numbers: a communicator made by Split or Dup has the
+    # top bit set (0x84000002), beyond int32.  The C int's bits are what MPI wants: wrap, do not refuse.
+    raw = [MPI._handleof(comm), MPI._handleof(ftype), MPI._handleof(MPI.INT64_T), MPI._handleof(MPI.MAX)]
+    return np.array([h % (1 << 64) for h in raw], np.uint64).astype(HANDLE_DTYPE)

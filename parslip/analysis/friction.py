@@ -1,0 +1,309 @@
+"""Friction observables of a run: mu(t), the static peak mu_s, what each front did, the precursors.
+
+Responsible for what the run's friction record says on top of the front
+catalogue (``analysis.fronts``): the friction coefficient mu(t) = -F_T / F_N
+the interface mobilises (``/interface/mu``, recorded with every frame), the
+onset of sliding, the static peak mu_s, the fate of each front (it crossed
+the contact, arrested inside it, left through an edge, or was still running
+when the record ended) and the precursors with their arrest lengths.  The
+one-row digest of all this, ``observables``, is what a sweep's summary
+table holds per point.
+
+Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
+
+  slip onset      t_slip, the first frame by which every interface bond has broken at least once since
+                  the drive began: the whole contact has then slipped, by one front crossing it or by
+                  several that share it out.  Tribologists call this the onset of (macroscopic) sliding:
+                  the block as a whole has moved on its substrate.  The ``edge_sites`` bonds at each end
+                  (2 % of the contact, at least one) are left out, as they are when a front counts as
+                  crossing: the bonds at a free corner may hold while the rest of the contact slips (on
+                  a 24-site contact pushed from the rear the front edge's bond never breaks while pulse
+                  after pulse arrives next to it; on 100 sites pulses stop 2 sites short).
+  static peak     mu_s = max mu(t) over 0 <= t <= t_slip: the largest tangential load the interface
+                  held before it had slipped everywhere, as experiments define static friction (the
+                  peak shear force before the first slip event that spans the contact; Rubinstein et
+                  al. 2007, Ben-David & Fineberg 2011).  A slow pulse takes a long time to cross: while
+                  it does, the part of the contact ahead of it still sticks and the force may still
+                  rise, so the window closes when the contact has slipped everywhere, not when the
+                  crossing front nucleates.  The friction force often goes on rising after t_slip
+                  (trains of pulses, each carrying a little slip); that is the sliding regime's
+                  resistance, not the static peak.  When the contact never slipped everywhere within
+                  the record, mu_s is the record's maximum and only a lower bound (``window`` "record").
+  place           where the peak sits relative to the first break (the first frame with any broken
+                  bond, ``fronts.first_break``): t_s - t_fb, "before", "at" (within one frame) or
+                  "after" it; mu at the first break is kept too.
+  fate            of a front, from its tip trajectory (the sites it reached) and the bonds ahead of it,
+                  the first rule that holds:
+                    crossed   it broke bonds from one edge of the contact to the other (it nucleated
+                              within ``edge_sites`` sites of one edge and reached the other), or it
+                              nucleated at an edge and every bond between its last site and the far
+                              edge broke within ``max_gap`` of its last advance: it met another front
+                              that finished the crossing (a pulse from the driven edge that sets off
+                              the last few bonds at the far edge at once, seen under pull);
+                    edge      the same from a nucleation inside the contact: it reached the far edge;
+                    merged    the bond just ahead of its tip was broken when it last advanced or broke
+                              within ``max_gap``: it ran into another front's broken zone;
+                    arrested  its tip stopped inside the contact with the bond ahead holding, and it did
+                              not advance for longer than the detector's patience (``max_gap``) before
+                              the record ended;
+                    running   as arrested but within ``max_gap`` of the record's end: it may still be
+                              moving, so it is not counted as arrested.
+  precursor       a front that arrested: a rupture that did not cross the contact (Rubinstein et al.
+                  2007), with its arrest time (its tip's last advance), arrest site and
+  arrest length   the length of contact it broke, from its nucleation site to its arrest site, both
+                  included: |x_arrest - x_nucleation| + 1/sites (l).  For a front from an edge, the
+                  distance from that edge to where it stopped.
+  rupture kind    of the run: the kind ("pulse" or "crack", ``fronts.Front.kind``) of the first front
+                  that crossed the contact.  When none crossed but the contact slipped everywhere all the
+                  same (a fast rupture the detector saw in pieces, or fronts that shared the contact
+                  out), the kind of the fronts that nucleated up to the slip onset, "mixed" if they
+                  differ; "none" when the contact never slipped everywhere and no front crossed.
+  mean speed      of a front, (x_last - x_first)/(t_last - t_first) (``Front.mean_speed``); the table
+                  gives |mean speed| of the first crossing front and the mean |mean speed| of all fronts.
+  slip per event  the mean over the fronts of the slip each carries (``Front.slip_u``, the median over
+                  the sites it crossed of the change of u its passage brings).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .fronts import Front, first_break, fronts as front_catalogue
+
+EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one site) of an edge has reached it
+
+
+def edge_sites(ns: int) -> int:
+    """Sites at each end of a contact of ``ns`` sites that count as its edge: 2 %, at least one."""
+    return max(1, int(round(EDGE_FRACTION * ns)))
+FATES = ("crossed", "edge", "merged", "arrested", "running")
+
+
+@dataclass
+class StaticPeak:
+    """The static peak of mu(t) and where it sits (times in l/c_r, mu dimensionless, F_s in m c^2/a)."""
+    mu_s: float                     # max mu over [0, slip_onset] (over the record if the contact never slipped)
+    time: float                     # t of the peak (its first frame)
+    frame: int
+    window: str                     # "slip onset": the peak of a contact that slipped; "record": a lower bound
+    slip_onset: float | None        # t_slip (None if the contact never slipped everywhere)
+    first_break_time: float | None  # t of the first broken bond (None if none broke)
+    first_break_x: float | None     # x of the first broken bond (the rearmost if several broke at once)
+    mu_first_break: float | None    # mu at the first break
+    after_first_break: float | None  # time - first_break_time (> 0: the peak came after the first break)
+    place: str                      # "before", "at" (within one frame) or "after" the first break; "no break"
+    force: float                    # F_s = mu_s * F_N, the static friction force
+
+    def to_dict(self) -> dict:
+        return {k: _clean(v) for k, v in self.__dict__.items()}
+
+
+@dataclass
+class Precursor:
+    """A front that arrested inside the contact (lengths in l, times in l/c_r)."""
+    index: int                      # its place in the front catalogue (0-based)
+    nucleation_time: float
+    nucleation_x: float
+    arrest_time: float              # its tip's last advance
+    arrest_x: float                 # the site where its tip stopped
+    arrest_length: float            # |arrest_x - nucleation_x| + 1/sites
+    kind: str
+    front: Front
+
+    def to_dict(self) -> dict:
+        return {k: _clean(v) for k, v in self.__dict__.items() if k != "front"}
+
+
+def _clean(v):
+    if isinstance(v, (np.floating, np.integer)):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+def mu(iface: dict) -> np.ndarray:
+    """mu(t) = -F_T / F_N per frame (``/interface/mu``); NaN for a record written without forces."""
+    if "mu" in iface:
+        return np.asarray(iface["mu"], float)
+    return np.full(len(iface["t"]), np.nan)
+
+
+def slip_onset(iface: dict) -> int | None:
+    """The first frame by which every interface bond but the ``edge_sites`` at each end has broken at
+    least once, or None."""
+    intact = iface["intact"]
+    e = edge_sites(intact.shape[1])
+    inner = intact[:, e:intact.shape[1] - e]
+    if inner.shape[1] == 0 or inner.shape[0] == 0:
+        return None
+    ever = np.logical_or.accumulate(inner == 0, axis=0).all(axis=1)
+    k = np.flatnonzero(ever)
+    return int(k[0]) if len(k) else None
+
+
+def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
+    """mu_s, its time and its place relative to the first break (see the module's definitions).
+
+    ``fn`` (F_N, m c^2/a) only scales mu_s into the static friction force F_s; without it F_s is NaN.
+    """
+    t = np.asarray(iface["t"], float)
+    m = mu(iface)
+    ks = slip_onset(iface)
+    end = len(t) if ks is None else ks + 1
+    window = "record" if ks is None else "slip onset"
+    seg = m[:end]
+    if len(seg) == 0 or not np.any(np.isfinite(seg)):
+        k = 0
+        mu_s = math.nan
+    else:
+        k = int(np.nanargmax(seg))
+        mu_s = float(seg[k])
+    t_s = float(t[k]) if len(t) else math.nan
+    tb, xb = first_break(iface)
+    if tb is None:
+        after = mu_b = x_b = None
+        place = "no break"
+    else:
+        kb = int(np.searchsorted(t, tb))
+        mu_b = float(m[kb])
+        x_b = float(xb[0])
+        after = t_s - tb
+        dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+        place = "at" if abs(after) <= dt * (1 + 1e-9) else ("after" if after > 0 else "before")
+    force = mu_s * fn if fn is not None and math.isfinite(mu_s) else math.nan
+    return StaticPeak(mu_s, t_s, k, window, None if ks is None else float(t[ks]), tb, x_b, mu_b, after, place,
+                      float(force))
+
+
+def fate(front: Front, iface: dict, max_gap: float = 3.0) -> str:
+    """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring)."""
+    x, t = iface["x"], iface["t"]
+    ns = len(x)
+    dx = 1.0 / ns
+    e = edge_sites(ns)
+    tol = (e + 0.5) * dx
+    xs = front.tip["x"]
+    lo, hi = float(xs.min()), float(xs.max())
+    at_rear, at_front = lo <= x[0] + tol, hi >= x[-1] - tol
+    if at_rear and at_front:            # a chain grows from its nucleation run to its tip: edge to edge
+        return "crossed"
+    d = front.direction
+    if (d > 0 and at_front) or (d < 0 and at_rear):
+        return "edge"
+    if d != 0:
+        near = at_rear if d > 0 else at_front
+        tip = int(np.argmin(np.abs(x - front.x_far)))
+        k0 = int(np.searchsorted(t, front.t_end - max_gap))
+        k_end = int(np.searchsorted(t, front.t_end))
+        k1 = int(np.searchsorted(t, front.t_end + max_gap, side="right"))
+        broken = iface["intact"][k0:k1] == 0
+        ahead = np.arange(tip + d, ns - e if d > 0 else e - 1, d)
+        if len(ahead) and broken[:, ahead].any(axis=0).all():
+            return "crossed" if near else "edge"
+        if 0 <= tip + d < ns and broken[k_end - k0:, tip + d].any():
+            return "merged"
+    return "running" if float(t[-1]) - front.t_end <= max_gap else "arrested"
+
+
+def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = 3.0) -> list[Precursor]:
+    """Every front that arrested inside the contact, with its arrest time, site and length."""
+    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
+    ns = len(iface["x"])
+    out = []
+    for i, f in enumerate(fr):
+        if fate(f, iface, max_gap) != "arrested":
+            continue
+        out.append(Precursor(i, f.nucleation_time, f.nucleation_x, f.t_end, f.x_far,
+                             abs(f.x_far - f.nucleation_x) + 1.0 / ns, f.kind, f))
+    return out
+
+
+def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
+                max_gap: float = 3.0) -> dict:
+    """One flat row of friction and front observables (the columns of a sweep's summary table).
+
+    Keys and units: first_break_time (l/c_r), first_break_x (l), mu_first_break, mu_s, mu_s_time (l/c_r),
+    mu_s_after_first_break (l/c_r), mu_s_place, mu_s_window, slip_onset_time (l/c_r), F_s (m c^2/a),
+    mu_sliding (mean mu after the slip onset), n_fronts, n_pulse, n_crack, n_crossed, n_precursors,
+    n_running, n_merged, precursor_arrest_mean, precursor_arrest_max (l), rupture_kind, front_speed (|mean speed|
+    of the first crossing front, c_r), front_speed_mean (mean |mean speed| of all fronts, c_r),
+    slip_per_event (l).  Missing values are NaN (numbers) or "" (words).
+    """
+    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
+    pk = static_peak(iface, fn)
+    fates = [fate(f, iface, max_gap) for f in fr]
+    pre = precursors(iface, fr, max_gap)
+    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+    nan = math.nan
+    m = mu(iface)
+    ks = slip_onset(iface)
+    sliding = m[ks:] if ks is not None else m[:0]
+    speeds = [abs(f.mean_speed) for f in fr if math.isfinite(f.mean_speed)]
+    slips = [f.slip_u for f in fr if math.isfinite(f.slip_u)]
+    arrests = [p.arrest_length for p in pre]
+
+    def num(v):
+        return nan if v is None else float(v)
+
+    return {
+        "first_break_time": num(pk.first_break_time), "first_break_x": num(pk.first_break_x),
+        "mu_first_break": num(pk.mu_first_break), "mu_s": num(pk.mu_s), "mu_s_time": num(pk.time),
+        "mu_s_after_first_break": num(pk.after_first_break), "mu_s_place": pk.place, "mu_s_window": pk.window,
+        "slip_onset_time": num(pk.slip_onset), "F_s": num(pk.force),
+        "mu_sliding": float(np.nanmean(sliding)) if len(sliding) and np.any(np.isfinite(sliding)) else nan,
+        "n_fronts": len(fr), "n_pulse": sum(f.kind == "pulse" for f in fr),
+        "n_crack": sum(f.kind == "crack" for f in fr), "n_crossed": len(crossed), "n_precursors": len(pre),
+        "n_running": fates.count("running"), "n_merged": fates.count("merged"),
+        "precursor_arrest_mean": float(np.mean(arrests)) if arrests else nan,
+        "precursor_arrest_max": float(np.max(arrests)) if arrests else nan,
+        "rupture_kind": rupture_kind(fr, fates, pk.slip_onset),
+        "front_speed": abs(crossed[0].mean_speed) if crossed else nan,
+        "front_speed_mean": float(np.mean(speeds)) if speeds else nan,
+        "slip_per_event": float(np.mean(slips)) if slips else nan,
+    }
+
+
+def rupture_kind(fr: list[Front], fates: list[str], t_slip: float | None) -> str:
+    """"pulse", "crack", "mixed" or "none" (the module's definition)."""
+    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+    if crossed:
+        return crossed[0].kind
+    if t_slip is None:
+        return "none"
+    kinds = {f.kind for f in fr if f.nucleation_time <= t_slip}
+    return kinds.pop() if len(kinds) == 1 else "mixed" if kinds else "none"
+
+
+# Units of the observables' columns, for tables and headers.
+UNITS = {"first_break_time": "l/c_r", "first_break_x": "l", "mu_first_break": "-", "mu_s": "-",
+         "mu_s_time": "l/c_r", "mu_s_after_first_break": "l/c_r", "mu_s_place": "-", "mu_s_window": "-",
+         "slip_onset_time": "l/c_r", "F_s": "m c^2/a", "mu_sliding": "-", "n_fronts": "-", "n_pulse": "-",
+         "n_crack": "-", "n_crossed": "-", "n_precursors": "-", "n_running": "-", "n_merged": "-",
+         "precursor_arrest_mean": "l",
+         "precursor_arrest_max": "l", "rupture_kind": "-", "front_speed": "c_r", "front_speed_mean": "c_r",
+         "slip_per_event": "l"}
+
+
+def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
+                  max_gap: float = 3.0) -> list[str]:
+    """The friction part of a run's report: static peak, slip onset, precursors."""
+    pk = static_peak(iface, fn)
+    if not math.isfinite(pk.mu_s):
+        return ["friction: no mu(t) in this record"]
+    where = ("" if pk.place == "no break" else
+             f", {abs(pk.after_first_break):.3f} l/c_r {pk.place} the first break (mu there {pk.mu_first_break:.4g})"
+             if pk.place != "at" else ", at the first break")
+    bound = "" if pk.window == "slip onset" else " (a lower bound: the contact never slipped everywhere)"
+    lines = [f"static peak mu_s = {pk.mu_s:.4g}{bound} at t = {pk.time:.3f} l/c_r{where}"]
+    lines.append(f"slip onset (every bond broken once) at t = {pk.slip_onset:.3f} l/c_r"
+                 if pk.slip_onset is not None else "slip onset: not within the record")
+    pre = precursors(iface, fr, max_gap)
+    if pre:
+        lines.append(f"{len(pre)} precursors (fronts that arrested), arrest lengths "
+                     + ", ".join(f"{p.arrest_length:.3f}" for p in pre[:12]) + " l")
+    else:
+        lines.append("no precursors (no front arrested inside the contact)")
+    return lines
