@@ -196,8 +196,10 @@ def test_the_run_object_exposes_the_friction_record():
 # ------------------------------------------------------------------------------------ a real short run --
 
 def test_real_run_friction_record(small_run):
-    """The SMALL push run: mu = -F_T/F_N in the file; mu_s is the largest mu up to the slip onset, which
-    the first pulse across the contact brings; the peak comes after the first break (slow pulses)."""
+    """The SMALL push run: mu = -F_T/F_N in the file; mu_s is the largest mu up to the slip onset, the first
+    frame by which every bond (but the edges') has broken once (on this coarse lattice a bond can break
+    and re-form between two frames, so that is not always the first crossing's end); the peak comes after
+    the first break (slow pulses)."""
     run = parslip.open(small_run)
     fn = run.scene["load.FN"]
     np.testing.assert_array_equal(run.mu, -run.friction_force / fn)
@@ -206,7 +208,10 @@ def test_real_run_friction_record(small_run):
     k = run.frame_at(pk.slip_onset)
     assert pk.mu_s == run.mu[:k + 1].max() and pk.mu_s > run.mu[0]
     first = run.fronts()[0]
-    assert run.fates()[0] == "crossed" and pk.slip_onset == pytest.approx(first.t_end)
+    assert run.fates()[0] == "crossed" and first.t_end <= pk.slip_onset <= run.times[-1]
+    broken = np.maximum.accumulate(run.interface["intact"] == 0, axis=0)         # broken once by then
+    inner = slice(1, broken.shape[1] - 1)                                         # 2 % of 24 sites: one a side
+    assert broken[k, inner].all() and not broken[k - 1, inner].all()
     assert pk.first_break_time == pytest.approx(first.nucleation_time)
     assert pk.place == "after" and pk.after_first_break > 0
 

@@ -44,7 +44,7 @@ def test_batch_script_requests_the_checkpoint_signal_and_uses_srun(script):
 class Cluster:
     """A submit directory, an output directory and the stand-ins, for one test."""
 
-    def __init__(self, tmp: Path):
+    def __init__(self, tmp: Path, numba_cache: Path):
         require("gather")
         self.dir = tmp / "submit"
         self.out = tmp / "out"
@@ -53,7 +53,7 @@ class Cluster:
         self.scene.write_text(small_toml(**TINY))
         self.env = cli_env(PATH=f"{STANDIN}{os.pathsep}{os.environ['PATH']}", SRUN_STANDIN_MPIEXEC=WHEEL_MPIEXEC,
                            SLURM_STANDIN_STATE=str(tmp / "state"), PARSLIP_ROOT=str(REPO),
-                           PARSLIP_OUTDIR=str(self.out), NUMBA_CACHE_DIR=str(tmp / "numba-cache"))
+                           PARSLIP_OUTDIR=str(self.out), NUMBA_CACHE_DIR=str(numba_cache))
 
     def run(self, *cmd, **env):
         p = subprocess.run(list(map(str, cmd)), cwd=self.dir, env={**self.env, **env}, capture_output=True, text=True,
@@ -69,9 +69,16 @@ class Cluster:
         return int(self.run("sbatch", "--parsable", *args, **env).stdout.split()[-1])
 
 
+@pytest.fixture(scope="module")
+def batch_numba_cache(tmp_path_factory):
+    """One numba cache for the module's batch jobs, as a cluster's shared NUMBA_CACHE_DIR would be: the
+    first job compiles the loop (about 40 s), the others load it."""
+    return tmp_path_factory.mktemp("numba-cache")
+
+
 @pytest.fixture
-def cluster(tmp_path):
-    return Cluster(tmp_path)
+def cluster(tmp_path, batch_numba_cache):
+    return Cluster(tmp_path, batch_numba_cache)
 
 
 def _status(path):

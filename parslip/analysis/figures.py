@@ -417,7 +417,7 @@ def fig_friction(run, out_dir: str) -> list[str]:
         log.info("friction figure skipped: the record holds no /interface/mu (written before parslip recorded "
                  "the friction force)")
         return []
-    plt = _plt()
+    plt = pyplot()
     t, mu = run.times, run.mu
     fn = run.scene.get("load.FN") or float("nan")
     pk = run.static_peak
