@@ -42,3 +42,16 @@ def small_run(tmp_path_factory):
     out = d / "small.vtkhdf"
     assert main(["run", str(sc), "--out", str(out), "--quiet", "--no-png"]) == 0
     return str(out)
+
+
+# Long enough that a signal, a fault or a hook lands inside the time loop (a million steps, several seconds
+# on 2 ranks); frames flushed every 64 so that writes happen throughout.
+LONG = {"drive.duration": 3000.0, "drive.v0": 0.0005, "output.buffer_frames": 64}
+
+
+@pytest.fixture
+def long_scene(tmp_path):
+    """A SMALL scene driven for a million steps (see LONG)."""
+    sc = tmp_path / "long.toml"
+    sc.write_text(small_toml(**LONG))
+    return sc

@@ -6,7 +6,6 @@ exceptions (bad input: ConfigError; a failed run: RunError, the file marked fail
 restart through the API; and without MPI: a one-rank run and all analysis load no MPI library.
 """
 import os
-import subprocess
 import sys
 import textwrap
 

@@ -50,7 +50,6 @@ def _mean_gap(sim):
     gap = sim.setup.scene["interface.delta0"] + ty[1, s]
     if not lat.rigid:
         g = sim.state.iface.geom
-        from parslip.engine.kernels import interface as ik
         cols = np.arange(s.start, s.stop) + g.tbase - g.bbase
         gap = gap - by[g.brow, cols]
     return gap

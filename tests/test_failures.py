@@ -18,18 +18,9 @@ import time
 import h5py
 import pytest
 
-from helpers import WRITERS, cli_command, cli_env, ranks_below, run_cli, small_toml
-
-# Long enough that the signal or the fault lands inside the time loop (a million
-# steps, several seconds on 2 ranks).
-LONG = {"drive.duration": 3000.0, "drive.v0": 0.0005}
+from helpers import WRITERS, cli_command, cli_env, ranks_below, run_cli
 
 
-@pytest.fixture
-def long_scene(tmp_path):
-    sc = tmp_path / "long.toml"
-    sc.write_text(small_toml(**LONG))
-    return sc
 
 
 @pytest.mark.parametrize("writer", WRITERS)

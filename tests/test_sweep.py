@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import parslip
-from helpers import REPO, SMALL, cli_env, datasets, run_cli, small_toml
+from helpers import cli_env, datasets, small_toml
 from parslip.cli import main
 from parslip.studies import sweep as S
 

@@ -16,7 +16,7 @@ import pytest
 
 from helpers import WRITERS, cli_command, cli_env, ranks_below, require, run_cli, small_toml
 
-LONG = {"drive.duration": 3000.0, "drive.v0": 0.0005, "output.buffer_frames": 64}
+from conftest import LONG
 HOOKS = "PARSLIP_TEST_HOOKS"
 STEP = 3000          # where the hooks strike: inside the drive (the settle ends near step 880)
 
@@ -37,12 +37,6 @@ def _status(out, wait_s=10.0) -> str:
             return s
         time.sleep(0.5)
 
-
-@pytest.fixture
-def long_scene(tmp_path):
-    sc = tmp_path / "long.toml"
-    sc.write_text(small_toml(**LONG))
-    return sc
 
 
 @pytest.mark.parametrize("writer", WRITERS)

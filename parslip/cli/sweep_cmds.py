@@ -117,7 +117,7 @@ def cmd_sweep(args) -> int:
         for p in res.summary:
             print(p)
         if res.stopped:
-            print(f"parslip: sweep stopped with checkpoints; continue with the same command", file=sys.stderr)
+            print("parslip: sweep stopped with checkpoints; continue with the same command", file=sys.stderr)
     return EXIT_INTERRUPTED if res.interrupted else 0
 
 

@@ -13,14 +13,13 @@ travel as floats: exact below 2^24 even in float32.
 """
 from __future__ import annotations
 
-from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
 from ..model.lattice import BOTTOM
 from . import mpi
-from .exchange import COMPLETE, POST, PROGRESS, REDUCE, SEGMENT, SITES, Plan
+from .exchange import POST, PROGRESS, REDUCE, SEGMENT, SITES, Plan
 
 TAG = 7
 def build_plan(layout, dtype, comm=None) -> Plan:
