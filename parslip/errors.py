@@ -43,8 +43,8 @@ class OptionalPartMissing(ConfigError):
 
 
 # Optional modules and the extra of pyproject.toml that installs each.
-EXTRAS = {"pyvista": "viz", "imageio": "viz", "imageio_ffmpeg": "viz", "mkdocs": "docs", "pandas": "study",
-          "xarray": "study", "h5netcdf": "study"}
+EXTRAS = {"pyvista": "viz", "imageio": "viz", "imageio_ffmpeg": "viz", "mkdocs": "docs", "pandas": "sweep",
+          "xarray": "sweep", "h5netcdf": "sweep"}
 
 
 def optional(module: str, purpose: str):
