@@ -163,13 +163,14 @@ def test_a_real_full_disk_mid_run(tmp_path, long_scene, tiny_disk):
             assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read() if proc.poll() else ""
             time.sleep(0.1)
         time.sleep(0.5)
-        with open(tiny_disk / "filler", "wb") as f:        # take every block that is left
-            try:
-                while True:
-                    f.write(b"\0" * 65536)
-                    f.flush()
-            except OSError:
-                pass
+        fd = os.open(tiny_disk / "filler", os.O_WRONLY | os.O_CREAT)     # take every block that is left
+        try:
+            while True:
+                os.write(fd, b"\0" * 4096)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
         _, err = proc.communicate(timeout=90)
     finally:
         if proc.poll() is None:
