@@ -147,3 +147,29 @@ def test_snapshot_count_is_as_asked(tmp_path, push):
             assert f["VTKHDF/Steps"].attrs["NSteps"] == 21
             vals = f["VTKHDF/Steps/Values"][...]
             assert vals[0] == 0.0 and vals[-1] == pytest.approx(dur, abs=0.01)
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_a_lattice_too_big_for_the_host_is_refused_before_anything_is_allocated(tmp_path, ranks):
+    """10^9 nodes: every rank predicts its own peak (scene.memory) against its host's MemAvailable and the
+    ranks agree, so the job ends with one line and exit 2 instead of being killed by the kernel hours into
+    set-up.  The need it names is at least the state and index alone: 2 Verlet levels of x, y in float64
+    (32 B) + the owned-node index (64 B) + the bond cells (48 B) per node, over the ranks."""
+    import re
+
+    from helpers import cli_command, cli_env
+    sc = tmp_path / "huge.toml"
+    sc.write_text("[lattice]\ntop_rows = 10000\ntop_cols = 100000\nbottom_rows = 20\nbottom_cols = 300000\n"
+                  "[drive]\nmode = \"push\"\nv0 = 1e-3\nduration = 0.001\n"
+                  "[output]\nsnapshots = 0\nfields = \"interface\"\n")
+    out = tmp_path / "o.vtkhdf"
+    p = subprocess.run(cli_command(ranks, "run", sc, "--out", out, "--no-png"), env=cli_env(), capture_output=True,
+                       text=True, timeout=180)
+    assert p.returncode == 2, p.stdout + p.stderr
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("parslip: error")]
+    assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    m = re.search(r"1,006,000,000 nodes on (\d) rank\(s\): rank \d would need about ([\d.]+) GiB but its host has "
+                  r"([\d.]+) GiB available; accepted:", lines[0])
+    assert m and int(m.group(1)) == ranks, lines[0]
+    assert float(m.group(2)) >= 1.006e9 * (32 + 64 + 48) / ranks / 2**30 > float(m.group(3)), lines[0]
+    assert not out.exists()

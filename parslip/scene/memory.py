@@ -52,30 +52,45 @@ def frame_buffer(nsites: int, n_frames: int) -> int:
     return int(min(max(16, FRAME_BUFFER_BYTES // per_frame), n_frames))
 
 
-def predict(setup, ranks: int, gather: bool = True) -> dict:
-    """Predicted peak resident bytes of each rank of a run of ``setup`` on ``ranks`` ranks."""
+def predict_rank(setup, rank: int, ranks: int, gather: bool = True) -> int:
+    """Predicted peak resident bytes of rank ``rank`` of a run of ``setup`` on ``ranks`` ranks."""
     from ..model.stability import LANCZOS_MAX_DOFS
     from ..parallel.layout import build_layout, owned_site_counts
     lat = setup.lattice
     item = np.dtype(setup.dtype).itemsize
     snapshots = setup.n_snapshots > 0
-    per_rank = []
-    for rank in range(ranks):
-        lay = build_layout(lat, rank, ranks, setup.reach, setup.scene["drive.mode"])
-        bl, tl = lay.blocks
-        cells = lambda b: int(np.prod(b.shape))           # noqa: E731
-        state = item * (4 * cells(bl) + 5 * cells(tl))     # 2 levels x (x, y), and the drive's reference (top)
-        c0, c1 = lay.col_range
-        owned = int(lat.col_start[c1] - lat.col_start[c0])
-        sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
-        widest = int(owned_site_counts(lat, lay.bounds).max())      # every rank's buffer holds as many frames
-        frames = frame_buffer(widest, setup.n_frames) * (sites * FRAME_SITE_BYTES + 8)
-        persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames
-        transient = owned * SNAPSHOT_BYTES if snapshots else 0
-        if rank == 0 and snapshots and (gather or ranks == 1):     # serial h5py writes every node here
-            transient = WRITER_FIXED + lat.n_nodes * WRITER_BYTES
-        omega = lat.n_nodes * OMEGA_BYTES if rank == 0 and 2 * lat.n_nodes <= LANCZOS_MAX_DOFS else 0
-        per_rank.append(BASE + persistent + max(transient, omega, owned * SETUP_BYTES))
-    n = max(lat.n_nodes, 1)
+    lay = build_layout(lat, rank, ranks, setup.reach, setup.scene["drive.mode"])
+    bl, tl = lay.blocks
+    cells = lambda b: int(np.prod(b.shape))           # noqa: E731
+    state = item * (4 * cells(bl) + 5 * cells(tl))     # 2 levels x (x, y), and the drive's reference (top)
+    c0, c1 = lay.col_range
+    owned = int(lat.col_start[c1] - lat.col_start[c0])
+    sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
+    widest = int(owned_site_counts(lat, lay.bounds).max())      # every rank's buffer holds as many frames
+    frames = frame_buffer(widest, setup.n_frames) * (sites * FRAME_SITE_BYTES + 8)
+    persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames
+    transient = owned * SNAPSHOT_BYTES if snapshots else 0
+    if rank == 0 and snapshots and (gather or ranks == 1):     # serial h5py writes every node here
+        transient = WRITER_FIXED + lat.n_nodes * WRITER_BYTES
+    omega = lat.n_nodes * OMEGA_BYTES if rank == 0 and 2 * lat.n_nodes <= LANCZOS_MAX_DOFS else 0
+    return BASE + persistent + max(transient, omega, owned * SETUP_BYTES)
+
+
+def predict(setup, ranks: int, gather: bool = True) -> dict:
+    """Predicted peak resident bytes of each rank of a run of ``setup`` on ``ranks`` ranks."""
+    per_rank = [predict_rank(setup, rank, ranks, gather) for rank in range(ranks)]
+    n = max(setup.lattice.n_nodes, 1)
     return {"per_rank": per_rank, "total": sum(per_rank),
             "bytes_per_node": (sum(per_rank) - ranks * BASE) / n}
+
+
+def available_bytes() -> int | None:
+    """Memory this host can still give a process (MemAvailable of /proc/meminfo), or None where unknown."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
