@@ -173,3 +173,15 @@ def test_a_lattice_too_big_for_the_host_is_refused_before_anything_is_allocated(
     assert m and int(m.group(1)) == ranks, lines[0]
     assert float(m.group(2)) >= 1.006e9 * (32 + 64 + 48) / ranks / 2**30 > float(m.group(3)), lines[0]
     assert not out.exists()
+
+
+def test_info_says_when_a_lattice_is_too_big_for_this_host(capsys, tmp_path):
+    sc = tmp_path / "huge.toml"
+    sc.write_text("[lattice]\ntop_rows = 10000\ntop_cols = 100000\nbottom_rows = 20\nbottom_cols = 300000\n"
+                  "[output]\nsnapshots = 0\nfields = \"interface\"\n")
+    code, out, _ = _run(capsys, "info", str(sc))
+    line = next(ln for ln in out.splitlines() if ln.startswith("memory"))
+    assert code == 0 and "this host has available: `parslip run` refuses it here" in line, line
+    code, out, _ = _run(capsys, "info", str(tmp_path.joinpath("small.toml").write_text("") or tmp_path / "small.toml"))
+    line = next(ln for ln in out.splitlines() if ln.startswith("memory"))
+    assert code == 0 and "refuses" not in line, line

@@ -43,7 +43,7 @@ def _block(label: str, items: list[str]) -> list[str]:
 
 def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[str]:
     """The lines of `parslip info` for the derived scene ``st`` on ``ranks`` ranks."""
-    from ..scene.memory import BASE, predict
+    from ..scene.memory import BASE, available_bytes, predict
     from ..io.output import hdf5_mode
     s, lat, mat = st.scene, st.lattice, st.material
     top, bot = lat.top, lat.bottom
@@ -96,10 +96,13 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
     # writer's rank 0 holds every node's snapshot fields, the collective one spreads them.
     writer = hdf5_mode(ranks)
     mem = predict(st, ranks, gather=writer == "gather")
+    have = available_bytes()
     big = max(range(ranks), key=lambda r: mem["per_rank"][r])
     out.append(_line("memory", f"{_mib(mem['per_rank'][big])} on the largest rank (rank {big}), "
                                f"{_mib(mem['total'])} in all on {ranks} rank(s): {mem['bytes_per_node']:.0f} B "
-                               f"per node beyond {_mib(BASE)} of process per rank (writer: {writer})"))
+                               f"per node beyond {_mib(BASE)} of process per rank (writer: {writer})"
+                               + (f"; more than the {_mib(have)} this host has available: `parslip run` refuses it "
+                                  f"here" if have is not None and mem["per_rank"][big] > have else "")))
     ob = budget.output_bytes(st)
     out.append(_line("output", f"{st.n_frames} interface frames (every {st.frame_every} steps) {_mib(ob['interface'])}"
                                f" + {st.n_snapshots} snapshots {_mib(ob['snapshots'])} = {_mib(ob['total'])} "
