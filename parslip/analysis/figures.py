@@ -95,13 +95,17 @@ def spacetime_picture(iface: dict, png: str, title: str = "") -> bool:
     for a free block, which has no interface."""
     if len(iface["x"]) == 0:
         return False
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5, 6))
+    # A bare Figure on the Agg canvas with fixed margins: no pyplot and no tight_layout, which every run
+    # would otherwise pay (about 0.1 s of the picture's 0.65 s; importing matplotlib is most of the rest).
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=(5, 6))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
     draw_spacetime(ax, iface)
     ax.set_title((f"{title}\n" if title else "") + "interface bonds: intact (yellow), broken (white)", fontsize=9)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.14, right=0.96, bottom=0.08, top=0.91)
     fig.savefig(png, dpi=120)
-    plt.close(fig)
     return True
 
 
