@@ -199,6 +199,18 @@ def run_cli(n: int, *args, writer: str = "gather", env: dict | None = None, time
     return run_limited(cli_command(n, *args, writer=writer), env=cli_env(**(env or {})), timeout=timeout)
 
 
+def reference_run(directory, scene: dict, *sets: str):
+    """A reference for a test module: ``scene`` (small_toml keys) written to DIRECTORY/s.toml and run to
+    the end on one rank with the gathering writer; returns (scene path, output path)."""
+    require("gather")
+    sc = directory / "s.toml"
+    sc.write_text(small_toml(**scene))
+    out = directory / "ref.vtkhdf"
+    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", *sets)
+    assert p.returncode == 0, p.stderr
+    return sc, out
+
+
 def datasets(path) -> tuple[dict, dict]:
     """Every dataset of an HDF5 file by name, and its root attributes."""
     import h5py

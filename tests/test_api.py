@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import parslip
-from helpers import SMALL, WHEEL_MPIEXEC, cli_env, datasets, require, run_cli, run_limited, scene, small_toml
+from helpers import SMALL, WHEEL_MPIEXEC, cli_env, datasets, reference_run, require, run_limited, scene
 
 # What a run writes about how and when it ran, which may differ between two runs of the same scene.
 PROVENANCE = {"command", "created_utc", "run_id", "scene_file", "git_commit", "host"}
@@ -35,14 +35,7 @@ def assert_same_run(a, b, differ=()):
 
 @pytest.fixture(scope="module")
 def cli_run(tmp_path_factory):
-    require("gather")
-    d = tmp_path_factory.mktemp("api")
-    sc = d / "s.toml"
-    sc.write_text(small_toml(**SHORT))
-    out = d / "cli.vtkhdf"
-    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.v0=0.03")
-    assert p.returncode == 0, p.stderr
-    return sc, out
+    return reference_run(tmp_path_factory.mktemp("api"), SHORT, "--set", "drive.v0=0.03")
 
 
 def _script(code: str, tmp, timeout=300, ranks=None):

@@ -11,7 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import datasets, require, run_cli, small_toml
+from helpers import datasets, reference_run, run_cli
 
 # SMALL with a checkpoint every 1 l/c_r (about 300 steps).
 CKPT = {"checkpoint.every": 1.0, "output.snapshots": 4}
@@ -28,13 +28,7 @@ def _assert_same(got, ref, skip=()):
 @pytest.fixture(scope="module")
 def uninterrupted(tmp_path_factory):
     """The reference: SMALL with checkpoints, run to the end on one rank without a stop."""
-    require("gather")
-    d = tmp_path_factory.mktemp("ref")
-    sc = d / "s.toml"
-    sc.write_text(small_toml(**CKPT))
-    out = d / "ref.vtkhdf"
-    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet")
-    assert p.returncode == 0, p.stderr
+    sc, out = reference_run(tmp_path_factory.mktemp("ref"), CKPT)
     return sc, datasets(out)
 
 
