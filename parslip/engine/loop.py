@@ -81,6 +81,10 @@ Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames f
                               "rigid brow dt v0 fext jump cf inv_cf damped")
 
 DRIVE_X, DRIVE_XY = 1, 2
+# Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
+# frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
+# Other steps skip it: a store per driven node, 3 % of a small shear step.
+KEEP_FORCE = 4
 
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)
@@ -120,12 +124,14 @@ def _flag(flags, bit, step, block, row, col, value):
 
 @njit(cache=True, _nrt=False, inline="always")
 def _drive(cy, px, py, r, j, drive, drive_on, shift, inv_cf):
-    """Set driven node (r, j) to its prescribed x; keep the force that took: (x_drive - x_free) / C.
-    With DRIVE_XY its y stays where it was (u_y(n+1) = u_y(n): held since the drive started)."""
+    """Set driven node (r, j) to its prescribed x; with KEEP_FORCE keep the force that took,
+    (x_drive - x_free) / C.  With DRIVE_XY its y stays where it was (u_y(n+1) = u_y(n): held since the
+    drive started)."""
     target = drive.drive0[r, j] + shift
-    drive.force[drive.index[r, j]] = (target - px[r, j]) * inv_cf
+    if drive_on & KEEP_FORCE:
+        drive.force[drive.index[r, j]] = (target - px[r, j]) * inv_cf
     px[r, j] = target
-    if drive_on == DRIVE_XY:
+    if drive_on & DRIVE_XY:
         py[r, j] = cy[r, j]
 
 
@@ -249,10 +255,13 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
 
 
 @njit(cache=True, _nrt=False)
-def _step(n, cur, nxt, plan, sched, K, prm, iface, drive, diag):
-    """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1)."""
+def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
+    """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1); ``n1`` is where the
+    call that takes this step ends."""
     n_ds = prm.n_drive_start
     drive_on = prm.drive if n >= n_ds else 0         # DRIVE_X or DRIVE_XY once the drive runs
+    if drive_on and (n + 1 >= n1 or (n + 1 - n_ds) % prm.frame_every == 0):
+        drive_on |= KEEP_FORCE
     if prm.drive and n == n_ds:
         d0 = drive.drive0
         for r in range(d0.shape[0]):
@@ -358,7 +367,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
             beat[BEAT_IN_LOOP] = 0
             return n, DONE
         nxt = _level(lv, n + 1)
-        _step(n, cur, nxt, plan, sched, K, prm, iface, drive, diag)
+        _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag)
         if (n + 1) % check == 0:
             t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
             _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)
