@@ -18,7 +18,8 @@ u(n-1) and receives u(n+1)):
  6. ``exchange(COMPLETE)``: HALO copies now hold u(n+1) and the bonds of step n.
 
 A driven node is first updated like any other; the drive then sets its x to
-the prescribed value and keeps the force that took (``drive_force``).
+the prescribed value and keeps the force that took (``drive_force``) in the
+steps whose end someone reads: a frame's step, or the end of the call.
 
 The rule for collective decisions.  Everything after which a rank enters an
 MPI collective (a write of frames or a snapshot, a checkpoint, a stop) must
