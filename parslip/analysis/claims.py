@@ -441,15 +441,6 @@ def alternatives(runs: dict) -> list[dict]:
     return out
 
 
-def roles_needed(claims=None) -> list[str]:
-    out = []
-    for c in claims or CLAIMS:
-        for r in c.needs:
-            if r not in out:
-                out.append(r)
-    return out
-
-
 def evaluate(runs: dict, claims=None) -> list[dict]:
     """One row per claim: key, claim, source, paper, parslip (formatted), value (raw, JSON-ready), units,
     tolerance, verdict; 'not measured' when a run is missing or holds too little."""

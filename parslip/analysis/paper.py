@@ -22,10 +22,6 @@ MARGIN = 0.25        # l/c_r: a front's slip window starts this long before its 
                      # after the site re-bonds
 
 
-def _nan(v) -> bool:
-    return v is None or (isinstance(v, float) and not math.isfinite(v))
-
-
 def driven_edge(run) -> float:
     """x/l of the edge a run's drive loads first: 1 for pull, else 0."""
     return 1.0 if run.mode == "pull" else 0.0
@@ -315,12 +311,6 @@ def section_width(run, t: float) -> float:
     return float(np.median(ends[keep] - starts[keep])) if keep.any() else math.nan
 
 
-def far_edge_width(run) -> float:
-    """Broken sites behind the first front's tip when it reaches its last site, a."""
-    fr = run.fronts()
-    return float(fr[0].tip["w"][-1]) if fr else math.nan
-
-
 # --- slip -------------------------------------------------------------------------------
 
 def _rebond_frame(intact: np.ndarray, k: int, s: int) -> int:
@@ -401,12 +391,6 @@ def slip_spread(run, fronts=range(1, 6)) -> float:
     s = [front_slip(run, i) for i in fronts if i < len(run.fronts())]
     s = [v for v in s if math.isfinite(v)]
     return float(np.std(s) / np.mean(s)) if len(s) > 1 and np.mean(s) > 0 else math.nan
-
-
-def median_slip(run, n: int = 4) -> float:
-    """Median over the first ``n`` fronts of the catalogue's slip_u (l)."""
-    s = [f.slip_u for f in run.fronts()[:n] if math.isfinite(f.slip_u)]
-    return float(np.median(s)) if s else math.nan
 
 
 def net_vertical_over_slip(run, n: int = 4) -> float:

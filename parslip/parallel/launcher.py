@@ -33,7 +33,7 @@ import shlex
 import sys
 from dataclasses import dataclass
 
-from ..errors import EXIT_BAD_INPUT, ConfigError
+from ..errors import ConfigError
 
 OPENMPI, MPICH = "Open MPI", "MPICH"
 BATCH_STEPS = ("batch", "extern", "4294967294", "4294967295")
@@ -245,14 +245,3 @@ def world_comm(env=None):
     if launcher is None or launcher.size == 1:
         return None
     return start_mpi(env)
-
-
-def start_or_refuse() -> int:
-    """For the command line: 0 when MPI is up, else the refusal printed once and exit code 2."""
-    try:
-        start_mpi()
-    except LauncherError as e:
-        if e.speak:
-            print(f"parslip: error: {e}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    return 0
