@@ -22,16 +22,19 @@ the prescribed value and keeps the force that took (``drive_force``) in the
 steps whose end someone reads: a frame's step, or the end of the call.
 
 The rule for collective decisions.  Everything after which a rank enters an
-MPI collective (a write of frames or a snapshot, a checkpoint, a stop) must
-happen at the same step on every rank.  So ``advance`` returns only where
-every rank returns:
+MPI collective (a write of frames, events or a snapshot, a checkpoint, a
+stop) must happen at the same step on every rank.  So ``advance`` returns
+only where every rank returns:
   - at ``n1``, which the caller computes from data every rank holds (the
     agreed chunk, the snapshot steps, the checkpoint steps);
   - FRAMES_FULL, when the frame buffer is full: its capacity is the same on
     every rank (sized from the largest slab's site count, ``Simulation``),
     and frames are recorded at the same steps everywhere;
   - STOPPED, when the flags, agreed every ``check_every`` steps with one
-    ``exchange(REDUCE)``, say some rank found a problem.
+    ``exchange(REDUCE)``, say some rank found a problem;
+  - EVENTS_FULL, when the same agreement says some rank holds more than
+    ``event_limit`` bond events: the record is sized so that it cannot
+    overflow before the next agreement (2 events per OWNED site per step).
 The exchange plan is passed in: on one rank it is a ``NullPlan`` and every
 exchange is a no-op that links no MPI (``parallel.exchange``).
 
@@ -78,8 +81,9 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   brow                    array row of the substrate's interface row
 #   dt, v0, fext, jump      time step (a/c), drive speed (a c/a), load per node at full F_N, runaway limit (a)
 #   cf, inv_cf, damped      C = dt^2/(1 + zeta dt/2) in the state's float type, 1/C, zeta > 0
+#   event_limit             events a rank may hold at an agreement before every rank returns EVENTS_FULL
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
-                              "rigid brow dt v0 fext jump cf inv_cf damped")
+                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit")
 
 DRIVE_X, DRIVE_XY = 1, 2
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
@@ -90,9 +94,10 @@ KEEP_FORCE = 4
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)
 
-# Flags: [status bits, step, block, row, global column, value*1e6 as int].
+# Flags: [status bits, step, block, row, global column, value*1e6 as int, events held].  The MAX over the
+# ranks of L_EVENTS is the fullest event record: every rank learns it at the same agreement.
 FLAG_NONFINITE, FLAG_RUNAWAY, FLAG_REACH, FLAG_DRIFT, FLAG_MPI = 1, 2, 4, 8, 16
-(L_BITS, L_STEP, L_BLOCK, L_ROW, L_COL, L_VALUE) = range(6)
+(L_BITS, L_STEP, L_BLOCK, L_ROW, L_COL, L_VALUE, L_EVENTS) = range(7)
 L_SIZE = 8
 
 # Phase timers (ns), accumulated in ``timers`` over one step in TIME_EVERY: [interface bonds, early tasks,
@@ -108,8 +113,9 @@ TIME_EVERY = 16
 BEAT_STEP, BEAT_IN_LOOP = 0, 1
 BEAT_SIZE = 2
 
-# Why ``advance`` returned.
-DONE, FRAMES_FULL, STOPPED = 0, 1, 2
+# Why ``advance`` returned: the end, the frame buffer full, a problem, or some rank's event record past
+# ``Params.event_limit`` (the caller writes frames and events out, then calls again).
+DONE, FRAMES_FULL, STOPPED, EVENTS_FULL = 0, 1, 2, 3
 
 
 @njit(cache=True, _nrt=False)
@@ -278,7 +284,7 @@ def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
     t0 = now_ns(clk) if timed else 0
     if prm.has_iface:
         br = prm.brow
-        ik.update(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], iface)
+        ik.update(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], iface)
         if iface.reach[0] >= 0:
             _flag(flags, FLAG_REACH, n, 1, 0, iface.reach[0], 0.0)
             iface.reach[0] = -1
@@ -373,6 +379,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
             t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
             _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)
             g = diag.gflags
+            diag.flags[L_EVENTS] = iface.events.count[0]
             for i in range(g.shape[0]):
                 g[i] = diag.flags[i]
             exchange(REDUCE, plan, lv.bx0, lv.by0, lv.tx0, lv.ty0, iface.partner, iface.x0, g)
@@ -381,4 +388,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
             if g[L_BITS] != 0:
                 beat[BEAT_IN_LOOP] = 0
                 return n + 1, STOPPED
+            if g[L_EVENTS] > prm.event_limit:
+                beat[BEAT_IN_LOOP] = 0
+                return n + 1, EVENTS_FULL
         n += 1

@@ -203,7 +203,8 @@ def _run(ranks, scene, out, sets, restart, overwrite, progress, stop_after, watc
     if not plan.checkpoint:
         ranks.decide(lambda: _check_room(out, st))
     ranks.agree(lambda: _check_memory(st, rank, size, ranks.comm))
-    sim = Simulation(st, ranks.comm, buffer_frames=sc["output.buffer_frames"])   # ConfigError alike everywhere
+    sim = Simulation(st, ranks.comm, buffer_frames=sc["output.buffer_frames"],
+                     buffer_events=sc["output.buffer_events"])   # ConfigError alike everywhere
     run_id = plan.run_id or ranks.decide(lambda: uuid.uuid4().hex)
     if plan.checkpoint:
         sim._phase("restore")

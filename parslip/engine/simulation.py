@@ -22,19 +22,15 @@ from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
-from ..scene.memory import frame_buffer
+from ..scene.memory import CHECK_EVERY, event_room, frame_buffer
 from .state import State
 
 # Work per compiled call, in node updates: about 0.3 s, so progress and output stay timely.
 CHUNK_UPDATES = 2e8
-# Steps between checks of the owned state and the agreement of all ranks on whether to stop.
-CHECK_EVERY = 256
-
-
 class Simulation:
     """One rank's share of the lattice and the loop that advances it."""
 
-    def __init__(self, setup, comm=None, dtype=None, buffer_frames: int = 0):
+    def __init__(self, setup, comm=None, dtype=None, buffer_frames: int = 0, buffer_events: int = 0):
         self.setup = st = setup
         self.comm = comm if comm is not None and comm.Get_size() > 1 else None
         rank, size = (comm.Get_rank(), comm.Get_size()) if self.comm else (0, 1)
@@ -42,12 +38,18 @@ class Simulation:
         sc = st.scene
         self.layout = build_layout(st.lattice, rank, size, st.reach, sc["drive.mode"])
         self.dtype = np.dtype(dtype or st.dtype)
-        self.state = State(st, self.layout, self.dtype)
+        lat = st.lattice
+        # The frame buffer holds the same number of frames on every rank: sized from the largest slab's site
+        # count, which every rank computes from the slab bounds; the event record is written out at an
+        # agreement of the ranks (see the collective rule in ``loop``).
+        counts = owned_site_counts(lat, self.layout.bounds)
+        widest = int(counts.max())
+        self.event_limit, capacity = event_room(int(counts[rank]) if lat.has_interface else 0, buffer_events)
+        self.state = State(st, self.layout, self.dtype, event_capacity=capacity)
         self.plan = build_plan(self.layout, self.dtype, self.comm)
         self.sched = L.Schedule(tasks=self.layout.tasks, ptr=task_ranges(self.layout.tasks))
         zeta = sc["time.zeta"]
         cf = st.dt * st.dt / (1.0 + 0.5 * zeta * st.dt)
-        lat = st.lattice
         self.params = L.Params(
             n_ramp=st.n_ramp, n_drive_start=st.n_drive_start,
             drive=0 if sc["drive.mode"] == "none" else L.DRIVE_XY if sc["drive.hold"] == "xy" else L.DRIVE_X,
@@ -55,13 +57,11 @@ class Simulation:
             has_iface=bool(lat.has_interface), rigid=bool(lat.rigid),
             brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),
             fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
-            cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=bool(zeta > 0))
+            cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=bool(zeta > 0),
+            event_limit=self.event_limit)
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
-        # The frame buffer holds the same number of frames on every rank: sized from the largest slab's
-        # site count, which every rank computes from the slab bounds (see the collective rule in ``loop``).
         nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
-        widest = int(owned_site_counts(lat, self.layout.bounds).max())
         cap = buffer_frames if buffer_frames > 0 else frame_buffer(widest, st.n_frames)
         self.buffer_frames = cap = int(min(cap, st.n_frames))
         ndrive = len(self.state.drive.force)
@@ -79,6 +79,7 @@ class Simulation:
         self.snapshots_total = len(self._snap)
         self.snapshots_written = 0
         self.last_frame_step = -1
+        self.events_written = 0          # bond events in the output file (over all ranks)
 
     # ---------------------------------------------------------------- steps --
     @property
@@ -162,7 +163,7 @@ class Simulation:
                 self.drive_clock = (time.monotonic(), time.process_time(), self.n)
             self._phase("loop")
             why = self.advance(target)
-            if why == L.FRAMES_FULL:
+            if why in (L.FRAMES_FULL, L.EVENTS_FULL):
                 self._flush(writer)
                 continue
             if why == L.STOPPED:
@@ -190,7 +191,13 @@ class Simulation:
         st = self.setup
         return st.to_lcr((np.asarray(steps) - st.n_drive_start) * st.dt)
 
+    def drive_time(self, k: np.ndarray) -> np.ndarray:
+        """Times (l/c_r) of drive steps ``k`` (negative before the drive), as ``frame_time`` computes them."""
+        st = self.setup
+        return st.to_lcr(np.asarray(k) * st.dt)
+
     def _flush(self, writer):
+        """Write out the frames and the bond events held (collective: every rank calls it at the same step)."""
         self._phase("write frames")
         fr = self.frames
         count = int(fr.cursor[L.C_COUNT])
@@ -201,6 +208,13 @@ class Simulation:
             writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]))
         fr.cursor[L.C_BASE] += count
         fr.cursor[L.C_COUNT] = 0
+        ev = self.state.iface.events
+        m = int(ev.count[0])
+        if writer is not None:
+            nds = self.setup.n_drive_start
+            self.events_written = writer.interface_events(
+                self.events_written, ev.step[:m] - nds, ev.site[:m], ev.kind[:m], ev.partner[:m], self.drive_time)
+        ev.count[0] = 0
 
     # ----------------------------------------------------------- checkpoints --
     def checkpoint_parts(self) -> dict:
@@ -246,6 +260,7 @@ class Simulation:
                 mpi_exchange(phase, self.plan, bx, by, tx, ty, s.iface.partner, s.iface.x0, self.diag.flags)
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
+        self.events_written = int(attrs["events_written"])
         # The output carries on after what the checkpointed run wrote, at this scene's cadence.
         written = int(attrs["frames_written"])
         self.last_frame_step = last = int(attrs["last_frame_step"])
@@ -267,6 +282,7 @@ class Simulation:
             counters = self.comm.allreduce(counters)
         return {"step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
                 "frames_written": self.frames_written, "last_frame_step": self.last_frame_step,
+                "events_written": self.events_written,
                 "snapshots_written": self.snapshots_written, "counters": counters,
                 "omega_max": st.omega_max, "omega_method": st.omega_method, "dt": st.dt, "n_ranks": self.size,
                 "precision": self.dtype.name}
@@ -299,6 +315,8 @@ class Simulation:
         fr = self.frames
         keep = int(np.searchsorted(fr.step[:int(fr.cursor[L.C_COUNT])], step, side="left"))
         fr.cursor[L.C_COUNT] = keep
+        ev = self.state.iface.events          # and so do events of those steps (each rank's are in step order)
+        ev.count[0] = int(np.searchsorted(ev.step[:int(ev.count[0])], step, side="left"))
         self._flush(writer)
         t = st.to_lcr((step - st.n_drive_start) * st.dt)
         if bits & (L.FLAG_NONFINITE | L.FLAG_RUNAWAY):

@@ -33,6 +33,13 @@ def stiffness_constants(kn: float, kt: float, dt: float, zeta: float) -> np.ndar
     return k
 
 
+def event_record(capacity: int):
+    """An empty event record (``kernels.interface.Events``) of ``capacity`` events."""
+    return ik.Events(step=np.zeros(capacity, np.int64), site=np.zeros(capacity, np.int32),
+                     kind=np.zeros(capacity, np.uint8), partner=np.zeros(capacity, np.int32),
+                     count=np.zeros(1, np.int64))
+
+
 def _arena(shapes, dtype) -> list[np.ndarray]:
     """Zeroed C-contiguous arrays of these shapes, carved from one allocation.
 
@@ -57,9 +64,10 @@ def _arena(shapes, dtype) -> list[np.ndarray]:
 
 
 class State:
-    """The arrays of one rank, built from the layout, in float type ``dtype``."""
+    """The arrays of one rank, built from the layout, in float type ``dtype``; room for ``event_capacity``
+    bond events (``Simulation`` sizes it and empties it before it can overflow)."""
 
-    def __init__(self, setup, layout, dtype=np.float64):
+    def __init__(self, setup, layout, dtype=np.float64, event_capacity: int = 0):
         self.setup, self.layout = setup, layout
         self.dtype = dt = np.dtype(dtype)
         lat, mat, sc = setup.lattice, setup.material, setup.scene
@@ -101,7 +109,8 @@ class State:
                               taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
                               exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
                               zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,
-                              counters=np.zeros(2, np.int64), reach=np.full(1, -1, np.int64))
+                              counters=np.zeros(2, np.int64), reach=np.full(1, -1, np.int64),
+                              events=event_record(event_capacity))
 
         self._index_owned()
 

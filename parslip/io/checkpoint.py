@@ -8,7 +8,7 @@ read it back):
   /drive_force    float [nodes]      the x-force the drive applied to each driven node in the last step
   /partner, /x0   int64, float [sites]  interface bonds: substrate site bonded to (-1 broken), rest offset x0
   root attributes  the step n, the resolved scene (TOML), omega_max and dt, the output cursor (frames and
-                   snapshots written), the bond event counters, the run id shared with the output file,
+                   snapshots written, bond events written), the bond event counters, the run id shared with the output file,
                    the rank count that wrote it, and ``complete`` = 1, set last.
 
 Writing: rank 0 gathers and writes ``PATH.tmp``, flushes and fsyncs it, then
@@ -26,9 +26,10 @@ import numpy as np
 
 from ..errors import ConfigError
 
-FORMAT = "parslip checkpoint 2"          # 2: with drive_force
+FORMAT = "parslip checkpoint 3"          # 2: with drive_force; 3: with events_written
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
-             "output.buffer_frames", "checkpoint.every", "checkpoint.wall", "interface.slip_reach", "run.watchdog")
+             "output.buffer_frames", "output.buffer_events", "checkpoint.every", "checkpoint.wall",
+             "interface.slip_reach", "run.watchdog")
 DATASETS = ("u", "u_prev", "drive0", "drive_force", "partner", "x0")
 
 

@@ -19,12 +19,25 @@ The writer (``io.output``) creates exactly these datasets and the readers
   /interface/drive_force     float64 [frames]  the sum over the driven nodes of the x-force the drive
                                                applied in the step that ended at the frame (m c^2/a)
   /interface/mu              float64 [frames]  -F_T / F_N, the friction coefficient the interface mobilises
+  /interface/step            int64   [frames]  the drive step of the frame (steps of dt; 0 = the drive's start)
+  /interface/events/         every bond break and re-formation of the run, in all phases (ramp, settle,
+                             drive), exact to the time step; 1-D datasets of one length, sorted by step, then
+                             site, then kind (a break before a re-formation of the same site in one step):
+      step     int64    the drive step whose update made it (negative before the drive)
+      time     float64  its time, l/c_r from the start of the drive, computed as /interface/time is
+      site     int32    the global interface site (the index of /interface/x)
+      kind     uint8    1 = break (EVENT_BREAK), 2 = re-formation (EVENT_FORM)
+      partner  int32    the substrate column the bond left (break) or joined (re-formation)
+    attributes: events_written (how many are valid), site_column0 (the substrate column facing site 0:
+    at the start every site s is bonded to column site_column0 + s)
   /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots
   root attributes                              resolved scene (TOML), provenance, derived constants, status,
                                                and the run's timings (``TIMINGS``, named timing_<name>)
 
 A frame at drive step k records the displacements u(k) and the bond state as
-it entered that step.  ``/interface`` attribute ``frames_written`` says how
+it entered that step; the events of step k come after it.  Replaying the
+events from the initial state (every site bonded to the column facing it)
+gives every frame's ``intact`` and ``partner`` (``replay_events``).  ``/interface`` attribute ``frames_written`` says how
 many frames are valid (a failed or interrupted run keeps what it wrote).
 """
 from __future__ import annotations
@@ -47,10 +60,22 @@ INTERFACE_DATASETS = {
     "drive_force": (np.float64, False, "m c^2/a: sum of the drive's x-forces on the driven nodes"),
     "mu": (np.float64, False, "-friction_force / F_N"),
 }
+INTERFACE_DATASETS["step"] = (np.int64, False, "drive steps (dt), 0 = the start of the drive")
 FRAME_FIELDS = ("intact", "partner", "ux", "uy", "sxy", "syy")
 # One value per frame, like ``time``.
 FORCE_DATASETS = ("friction_force", "drive_force", "mu")
-PER_FRAME_1D = ("time",) + FORCE_DATASETS
+PER_FRAME_1D = ("time", "step") + FORCE_DATASETS
+
+# The bond events: /interface/events/<name>, name: (dtype, units).
+EVENTS = "events"
+EVENT_DATASETS = {
+    "step": (np.int64, "drive steps (dt), negative before the drive"),
+    "time": (np.float64, "l/c_r from the start of the drive"),
+    "site": (np.int32, "global interface site"),
+    "kind": (np.uint8, "1 = break, 2 = re-formation"),
+    "partner": (np.int32, "substrate column left (break) or joined (re-formation)"),
+}
+EVENT_BREAK, EVENT_FORM = 1, 2
 
 # The run's timings, root attributes named TIMING_PREFIX + name, in seconds unless said.
 TIMING_PREFIX = "timing_"
@@ -84,6 +109,37 @@ def read_interface(path: str) -> dict:
                 out[name] = g[name][:n] if per_frame or name in PER_FRAME_1D else g[name][...]
         out["t"] = out["time"]
         return out
+
+
+def read_events(path: str) -> dict | None:
+    """The bond events of a run file (``EVENT_DATASETS``, cut to ``events_written``), with the attribute
+    ``site_column0`` as an int; None for a file written before events existed."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        g = f[INTERFACE].get(EVENTS)
+        if g is None:
+            return None
+        n = int(g.attrs.get("events_written", 0))
+        out = {name: g[name][:n] for name in EVENT_DATASETS}
+        out["site_column0"] = int(g.attrs["site_column0"])
+        return out
+
+
+def replay_events(events: dict, n_sites: int, frame_steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(intact, partner) [frames, sites] rebuilt from the events alone: from the initial state (site s bonded
+    to column site_column0 + s), apply every event before each frame's step (a frame records the bond state as
+    it entered its step).  Equal to the frames' own record: the test of a complete event record."""
+    partner = np.arange(n_sites, dtype=np.int64) + events["site_column0"]
+    steps, sites, kinds, cols = events["step"], events["site"], events["kind"], events["partner"]
+    out = np.zeros((len(frame_steps), n_sites), np.int32)
+    e = 0
+    for k, s in enumerate(frame_steps):
+        while e < len(steps) and steps[e] < s:
+            partner[sites[e]] = -1 if kinds[e] == EVENT_BREAK else cols[e]
+            e += 1
+        out[k] = partner
+    return (out >= 0).astype(np.uint8), out
 
 
 # --- reader helpers for parslip.open and the analysis commands ----------------------------

@@ -23,7 +23,7 @@ from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from .contract import FORCE_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, TIMING_PREFIX
+from .contract import EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, TIMING_PREFIX
 from .scenefile import to_toml
 
 VTK_LINE = 3
@@ -34,6 +34,7 @@ VTK_LINE = 3
 # (measured on 100 sites: 1.7 against 2.9 us per frame with 655-frame chunks; a 1,000-node snapshot's
 # Points written into 65,536-row chunks read 1.5 MB back each time).
 CHUNK_BYTES = 1 << 20
+EVENT_CHUNK = 1 << 14            # events per chunk of /interface/events/* (grown at each flush that has some)
 MAX_FRAME_CHUNK_BYTES = 4 << 20
 # The file is flushed (metadata and all) at least this often while frames are written (s), at each
 # checkpoint and at the end: a full disk shows within this long, and without a flush per block of frames.
@@ -289,7 +290,7 @@ class Output:
             elif per_frame:
                 ds = g.create_dataset(name, shape=(nf, ns), maxshape=(None, ns), dtype=dt_,
                                       chunks=(rows, ns), dcpl=_early())
-            elif name == "time" or name in FORCE_DATASETS:
+            elif name in PER_FRAME_1D:
                 ds = g.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=dt_, chunks=(max(rows, 64),),
                                       dcpl=_early())
             else:
@@ -300,6 +301,13 @@ class Output:
             self._handles[f"interface/{name}"] = ds
         if self.root:
             g["x"][...] = (np.arange(ns) + 0.5) / ns    # node s stands at the middle of its spacing
+        ev = self._handles[f"interface/{EVENTS}"] = g.create_group(EVENTS)
+        ev.attrs["events_written"] = 0
+        ev.attrs["site_column0"] = int(st.lattice.top.col0)
+        for name, (dt_, unit) in EVENT_DATASETS.items():
+            ds = ev.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dt_, chunks=(EVENT_CHUNK,))
+            ds.attrs["units"] = unit
+            self._handles[f"interface/{EVENTS}/{name}"] = ds
         if self.sim.snapshots_total == 0 or st.scene["output.fields"] == "interface":
             return          # no snapshots asked for: no empty VTKHDF group either
         v = self._handles["VTKHDF"] = f.create_group("VTKHDF")
@@ -393,9 +401,13 @@ class Output:
             g = f["interface"]
             nf = self.sim.frames_total
             for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
-                if (per_frame and self.n_sites) or name == "time" or name in FORCE_DATASETS:
+                if (per_frame and self.n_sites) or name in PER_FRAME_1D:
                     if name in g:
                         g[name].resize(nf, axis=0)
+            if EVENTS in g:                  # events past the checkpoint's are written again from there
+                for name in EVENT_DATASETS:
+                    g[EVENTS][name].resize(self.sim.events_written, axis=0)
+                g[EVENTS].attrs["events_written"] = self.sim.events_written
             if "VTKHDF" in f:
                 old = self._old_snapshots = f["VTKHDF/NumberOfPoints"].shape[0]
                 for name, shape in self._vtk_shapes(self.sim.snapshots_total).items():
@@ -420,8 +432,11 @@ class Output:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         sums = self.forces(frames.fx[:count], frames.fdrive[:count])
         if self.root:
+            steps = frames.step[:count] - self.sim.setup.n_drive_start
+
             def put():
                 self._ds("interface/time")[k0:k0 + count] = times
+                self._ds("interface/step")[k0:k0 + count] = steps
                 for name, values in sums.items():
                     self._ds(f"interface/{name}")[k0:k0 + count] = values
             self._write("interface/time", put)
@@ -436,6 +451,39 @@ class Output:
                 self._flushed = time.monotonic()
         self._agree_write()
         self.frames_safe = k0 + count
+
+    def interface_events(self, k0: int, steps, sites, kinds, partners, time_of) -> int:
+        """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``)
+        at index ``k0`` of /interface/events, in the contract's order: by step, then site, then kind.
+        Collective, also for a rank with none; ``time_of(steps)`` gives their times (l/c_r).  Returns the
+        events in the file, the same on every rank."""
+        mine = (np.asarray(steps, np.int64), np.asarray(sites, np.int32), np.asarray(kinds, np.uint8),
+                np.asarray(partners, np.int32))
+        parts = [mine] if self.size == 1 else self.comm.gather(mine, root=0)
+        total = None
+        if self.root:
+            step, site, kind, partner = (np.concatenate(col) for col in zip(*parts))
+            order = np.lexsort((kind, site, step))
+            data = {"step": step[order], "site": site[order], "kind": kind[order], "partner": partner[order]}
+            data["time"] = np.asarray(time_of(data["step"]), np.float64)
+            total = k0 + len(order)
+        if self.size > 1:
+            total = self.comm.bcast(total, root=0)
+        if total == k0:
+            return total
+        self._agree_write()            # before the collective resize below
+        if self.f is not None:
+            def grow():
+                g = self._ds(f"interface/{EVENTS}")
+                for name in EVENT_DATASETS:
+                    self._ds(f"interface/{EVENTS}/{name}").resize((total,))
+                if self.root:
+                    for name in EVENT_DATASETS:
+                        self._ds(f"interface/{EVENTS}/{name}")[k0:total] = data[name]
+                g.attrs["events_written"] = total
+            self._write(f"interface/{EVENTS}", grow)
+        self._agree_write()
+        return total
 
     def forces(self, fx, fdrive) -> dict:
         """Rank 0: the per-frame sums over the whole interface and every driven node, in global order, so

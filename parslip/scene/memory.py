@@ -43,6 +43,10 @@ SETUP_BYTES = 100
 OMEGA_BYTES = 1200
 FRAME_BUFFER_BYTES = 8 << 20     # interface frames held in memory between writes, per rank
 FRAME_SITE_BYTES = 45            # per site and frame: intact 1 + partner 4 + ux, uy, sxy, syy, fx 8 each
+EVENT_BYTES = 17                 # per bond event held: step 8 + site 4 + kind 1 + partner 4
+EVENT_BUFFER = 100_000           # bond events a rank holds before the ranks write them out, by default (1.7 MB)
+# Steps between two agreements of the ranks (``engine.loop``: the checks of the state, the stop, the events).
+CHECK_EVERY = 256
 
 
 def frame_buffer(nsites: int, n_frames: int) -> int:
@@ -50,6 +54,17 @@ def frame_buffer(nsites: int, n_frames: int) -> int:
     FRAME_BUFFER_BYTES worth, at least 16, at most the run's frames."""
     per_frame = max(nsites, 1) * FRAME_SITE_BYTES + 8
     return int(min(max(16, FRAME_BUFFER_BYTES // per_frame), n_frames))
+
+
+def event_room(sites: int, buffer_events: int = 0) -> tuple[int, int]:
+    """(limit, capacity) of the bond-event record of a rank with ``sites`` OWNED interface sites.
+
+    The ranks write their events out at the first agreement (every ``CHECK_EVERY`` steps) at which any rank
+    holds more than ``limit`` (``output.buffer_events``, 0 = ``EVENT_BUFFER``): the same number on every rank.
+    Between two agreements a rank adds at most 2 events per site and step (a break and a re-formation), so a
+    record of ``limit + 2 sites CHECK_EVERY`` never overflows."""
+    limit = int(buffer_events if buffer_events > 0 else EVENT_BUFFER)
+    return limit, (limit + 2 * sites * CHECK_EVERY if sites > 0 else 0)
 
 
 def predict_rank(setup, rank: int, ranks: int, gather: bool = True) -> int:
@@ -68,7 +83,8 @@ def predict_rank(setup, rank: int, ranks: int, gather: bool = True) -> int:
     sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
     widest = int(owned_site_counts(lat, lay.bounds).max())      # every rank's buffer holds as many frames
     frames = frame_buffer(widest, setup.n_frames) * (sites * FRAME_SITE_BYTES + 8)
-    persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames
+    events = event_room(sites, setup.scene["output.buffer_events"])[1] * EVENT_BYTES
+    persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames + events
     transient = owned * SNAPSHOT_BYTES if snapshots else 0
     if rank == 0 and snapshots and (gather or ranks == 1):     # serial h5py writes every node here
         transient = WRITER_FIXED + lat.n_nodes * WRITER_BYTES

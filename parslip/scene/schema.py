@@ -120,6 +120,10 @@ SCHEMA: dict[str, Key] = {
     "output.buffer_frames": Key(0, int, "frames", ">= 0 (0 = auto: 8 MiB of frames on the widest slab)",
                                 _range(0), "interface frames held in memory between writes, the same on every "
                                 "rank; changes no result"),
+    "output.buffer_events": Key(0, int, "events", ">= 0 (0 = auto: 100,000)", _range(0),
+                                "bond events a rank may hold before every rank writes its events out (checked "
+                                "every 256 steps; the record has room for what can happen in between); changes "
+                                "no result"),
     # checkpoints -------------------------------------------------------------------
     "checkpoint.every": Key(0.0, float, "l/c_r", ">= 0 (0 = none on a simulated-time cadence)", _range(0.0),
                             "simulated time between checkpoints (OUT.ckpt.h5, replaced atomically)"),

@@ -35,6 +35,8 @@ from .floats import like
 
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
 BREAKS, FORMS = 0, 1
+# Kinds of a bond event (``/interface/events/kind``).
+BREAK, FORM = 1, 2
 
 # The integer geometry of the interface on one rank (local array columns unless said):
 #   tbase, bbase     global column of array column 0 of the block's / the substrate's interface row
@@ -59,7 +61,16 @@ Constants = namedtuple("Constants", "delta0 delta_b kx ky reform_zero drift inv_
 # bond; claim and taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom
 # nodes; zeros a row of zeros; counters [BREAKS, FORMS] of OWNED sites; reach[0] the first OWNED site
 # out of the halo's reach (-1 none).
-Iface = namedtuple("Iface", "partner x0 claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach")
+Iface = namedtuple("Iface", "partner x0 claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach events")
+# The event record of one rank: every break and re-formation of an OWNED top site, in the order the loop
+# makes them (by step; within a step the breaks in site order, then the re-formations in site order):
+#   step     the step n whose update made it (absolute, from the start of the ramp)
+#   site     the global interface site (0 = the block's first column)
+#   kind     BREAK or FORM
+#   partner  the substrate column the bond left (BREAK) or joined (FORM)
+#   count    count[0]: events held.  The caller sizes the arrays for the worst case between two agreements
+#            of the ranks (2 events per OWNED site per step) and empties them before they can overflow.
+Events = namedtuple("Events", "step site kind partner count")
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -68,14 +79,26 @@ def _gap(g, q, tx, ty, bx, by, j, i, d0):
     return like(g - q, d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def _event(ev, n, site, kind, q):
+    """Append one event to the record ``ev`` (room is guaranteed by the caller's agreement)."""
+    c = ev.count[0]
+    ev.step[c] = n
+    ev.site[c] = site
+    ev.kind[c] = kind
+    ev.partner[c] = q
+    ev.count[0] = c + 1
+
+
 @njit(cache=True, _nrt=False)
-def update(tx, ty, bx, by, it):
-    """Steps 1-3 above on every local top site, then the bond forces at u(t).
+def update(n, tx, ty, bx, by, it):
+    """Steps 1-3 above on every local top site at step ``n``, then the bond forces at u(t).
 
     tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row.  ``partner`` holds global
     bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
     (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
-    there is no bond.  ``claim`` is scratch: the free sites, then their claims.
+    there is no bond.  ``claim`` is scratch: the free sites, then their claims.  Every break and
+    re-formation of an OWNED site is counted and appended to ``events`` (``Events``).
 
     ``reach[0]`` becomes the global column of the first OWNED top site whose bond or re-bonding
     window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
@@ -86,6 +109,7 @@ def update(tx, ty, bx, by, it):
     tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
     bbase, blo, bhi, bcols, w = g.bbase, g.blo, g.bhi, g.bcols, g.window
     bown0, bown1 = g.bown0, g.bown1
+    ev, site0 = it.events, tbase - g.tfirst            # global site = local column + site0
     d0, db, kx, ky = p.delta0, p.delta_b, p.kx, p.ky
     db2, d02 = db * db, p.rebond * p.rebond
     if p.facing:
@@ -119,6 +143,7 @@ def update(tx, ty, bx, by, it):
             partner[j] = -1
             if top_own:
                 counters[BREAKS] += 1
+                _event(ev, n, j + site0, BREAK, q)
         claim[nfree] = j
         nfree += 1
     # 2. Claims of the free sites, kept in their slot m of ``claim`` (their site is claim_site[m]).
@@ -161,6 +186,7 @@ def update(tx, ty, bx, by, it):
         _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
         if top_own:
             counters[FORMS] += 1
+            _event(ev, n, j + site0, FORM, i + bbase)
 
 
 @njit(cache=True, inline="always", _nrt=False)
