@@ -114,9 +114,16 @@ def test_real_run_catalogue(small_run):
         assert f.direction == 1 and f.nucleation_x < 0.05 and f.kind == "pulse"
         assert 0 < f.mean_speed < 1.0 and f.slip_u > 0
         assert 1 <= f.width <= 3
-        for tj, xj in zip(f.tip["t"], f.tip["x"]):
-            k, s = run.frame_at(tj), int(np.argmin(np.abs(run.x - xj)))
-            assert it["intact"][k, s] == 0 and (k == 0 or it["intact"][k - 1, s] == 1)
+        # Each arrival is a break event of that site at that step, exact to dt, and the last frame before
+        # it shows the bond intact.
+        ev = run.events
+        assert f.resolution == pytest.approx(run.attrs["dt"] * run.attrs["c_r"] / run.attrs["l"])
+        for step, tj, xj in zip(f.tip["step"], f.tip["t"], f.tip["x"]):
+            s = int(np.argmin(np.abs(run.x - xj)))
+            hit = (ev["step"] == step) & (ev["site"] == s) & (ev["kind"] == 1)
+            assert hit.sum() == 1 and ev["time"][hit][0] == tj
+            k = int(np.searchsorted(it["step"], step, side="right")) - 1
+            assert it["intact"][k, s] == 1
     # Each pulse moves the bonds it passes on by one substrate site (the partner index),
     # so the slip it carries is about one lattice spacing, 1/24 l here.
     # The first carries more (its window starts at t = 0, with the loading: Sec. 3.4).

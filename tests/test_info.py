@@ -133,11 +133,14 @@ def test_float32_halves_the_predicted_wall_time(capsys, tmp_path):
 
 
 def _data_bytes(path) -> int:
-    """Bytes of data in every dataset of an HDF5 file."""
-    sizes = []
+    """Bytes of data in every dataset of an HDF5 file but the bond events, whose number the physics decides;
+    those are checked against ``budget.EVENT_FILE_BYTES`` per event here."""
+    sizes, events = [], []
     with h5py.File(path, "r") as f:
-        f.visititems(lambda name, obj: sizes.append(obj.size * obj.dtype.itemsize)
+        f.visititems(lambda name, obj: (events if "/events/" in name else sizes).append(obj.size * obj.dtype.itemsize)
                      if isinstance(obj, h5py.Dataset) else None)
+        n_events = int(f["interface/events"].attrs["events_written"])
+    assert sum(events) == budget.EVENT_FILE_BYTES * n_events
     return sum(sizes)
 
 

@@ -21,6 +21,7 @@ from parslip.parallel.layout import column_cost, owned_site_counts, partition
 from parslip.scene.derive import derive
 
 FUZZ = {**SMALL, "lattice.bottom_cols": 90, "drive.v0": 0.05, "drive.duration": 6.0, "output.buffer_frames": 7,
+        "output.buffer_events": 5,
         "output.snapshots": 2}
 LIMIT_S = 150                # per run: a hung run fails here at the latest
 WATCHDOG = ("--watchdog", "30")   # and its own watchdog ends it sooner, naming where the ranks wait

@@ -24,7 +24,17 @@ def load_interface(path: str) -> dict:
 
 
 def first_break(iface: dict):
-    """(t, x) of the first frame with a broken bond: time in l/c_r, the broken sites' x in l."""
+    """(t, x) of the first bond break: time in l/c_r, the x (l) of the sites that broke then.  Exact to the
+    time step from the event record (the drive phase's first break: ramp and settle are the preparation);
+    from the frames (the first frame with a broken bond) for files written before events existed."""
+    ev = iface.get("events")
+    if ev is not None:
+        hit = np.flatnonzero((ev["kind"] == EVENT_BREAK) & (ev["step"] >= 0))
+        if len(hit) == 0:
+            return None, np.zeros(0)
+        first = ev["step"][hit[0]]
+        sites = ev["site"][hit][ev["step"][hit] == first]
+        return float(ev["time"][hit[0]]), iface["x"][np.unique(sites)]
     broken = iface["intact"] == 0
     rows = np.flatnonzero(broken.any(axis=1))
     if len(rows) == 0:
@@ -52,13 +62,19 @@ class Front:
     direction: int              # +1 toward x/l = 1, -1 toward x/l = 0, 0 if it did not move
     kind: str                   # "pulse" (bonds re-attach behind the tip) or "crack"
     mean_speed: float           # (x_last - x_first) / (t_last - t_first), signed, c_r
-    max_speed: float            # local speed of largest magnitude, signed, c_r
+    max_speed: float            # local speed of largest magnitude, signed, c_r (bursts left out)
     steady_speed: float         # |speed| fitted over the middle 60 % of the sites, c_r
     accel_x: float | None       # first x_tip where |v| exceeds ACCEL_FACTOR x the early median speed
     width: float                # median width of the broken zone behind the tip, a
     slip_u: float               # median of tip["du"], l
     slip_v: float               # median of tip["dv"], l
     tip: dict = field(repr=False)
+    resolution: float = math.nan   # time resolution of the arrival times, l/c_r: dt (events) or a frame
+    fit_sites: int = 5          # sites in each local speed fit (2 window + 1)
+    # Stretches of the tip's path, each {"sites": [first, last], "x": [x0, x1] (l), "t": [t0, t1] (l/c_r),
+    # "n_sites", "n_steps" (distinct break steps), "max_speed" (c_r, unsigned; None for a burst)}:
+    supershear: list = field(default_factory=list)   # local speed above c_s (and at most c_l)
+    bursts: list = field(default_factory=list)       # fits above c_l: near-simultaneous breaks, not a speed
 
     # Names the run summary and older callers use.
     @property
@@ -103,7 +119,8 @@ class Front:
             return v
         d = {k: clean(getattr(self, k)) for k in
              ("nucleation_time", "nucleation_x", "direction", "kind", "mean_speed", "max_speed",
-              "steady_speed", "accel_x", "width", "slip_u", "slip_v")}
+              "steady_speed", "accel_x", "width", "slip_u", "slip_v", "resolution", "fit_sites")}
+        d["supershear"], d["bursts"] = self.supershear, self.bursts
         d["tip"] = {k: [clean(float(v)) for v in a] for k, a in self.tip.items()}
         return d
 
@@ -274,7 +291,7 @@ def _front(c: _Chain, iface: dict, h: int, windows: dict) -> Front:
     tip = {"t": tt.astype(float), "x": xx.astype(float), "v": v, "w": w, "du": du, "dv": dv,
            "u_behind": ub, "v_behind": vb}
     return Front(float(tt[0]), float(xx[0]), int(d), kind, float(mean), vmax, float(steady), accel,
-                 med(w), med(du), med(dv), tip)
+                 med(w), med(du), med(dv), tip, resolution=dt_frame, fit_sites=2 * h + 1)
 
 
 def _slip_windows(kept: list[_Chain], nf: int) -> dict:
@@ -303,7 +320,12 @@ def fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5, window: int = 
 
     ``max_gap`` (l/c_r): longest pause of a tip whose bond re-attached before it
     advanced again; ``window``: the local speed is fitted over 2 * window + 1 sites.
+    A record with bond events (``iface["events"]``, every file written since
+    they exist) gives tips resolved to the time step (``event_fronts``); older
+    files, tips resolved to the frame interval.
     """
+    if iface.get("events") is not None:
+        return event_fronts(iface, max_gap, min_sites, window)
     kept = [c for c in chains(iface, max_gap) if len(c.arrival) >= min_sites]
     windows = _slip_windows(kept, len(iface["t"]))
     out = [_front(c, iface, window, windows) for c in kept]
@@ -331,7 +353,26 @@ def table(fr: list[Front], fates: list[str] | None = None, arrest: dict | None =
         if extra:
             row += f" {fates[i]:>8} " + (f"{arrest[i]:6.3f}" if i in arrest else f"{'-':>6}")
         rows.append(row)
-    return "\n".join(rows)
+    return "\n".join(rows + resolution_lines(fr))
+
+
+def resolution_lines(fr: list[Front]) -> list[str]:
+    """What the catalogue's speeds are resolved to, and every stretch flagged as supershear or as a burst."""
+    if not fr:
+        return []
+    f0 = fr[0]
+    src = "exact break steps" if f0.tip.get("step") is not None else "interface frames"
+    out = [f"speeds: tip arrival times from {src} (resolution {f0.resolution:.3g} l/c_r), each local speed "
+           f"fitted over {f0.fit_sites} sites"]
+    for i, f in enumerate(fr):
+        for name, items in (("supershear (above c_s)", f.supershear), ("burst (fit above c_l: near-simultaneous "
+                                                                      "breaks, no speed)", f.bursts)):
+            for b in items:
+                speed = f", up to {b['max_speed']:.3g} c_r" if b.get("max_speed") is not None else ""
+                out.append(f"  front {i + 1}: {name}: sites {b['sites'][0]}-{b['sites'][1]} (x/l {b['x'][0]:.3f}-"
+                           f"{b['x'][1]:.3f}), t = {b['t'][0]:.4f}-{b['t'][1]:.4f} l/c_r, {b['n_sites']} sites in "
+                           f"{b['n_steps']} steps{speed}")
+    return out
 
 
 def summary(iface: dict, fn: float | None = None) -> str:
@@ -352,3 +393,189 @@ def summary(iface: dict, fn: float | None = None) -> str:
     if "mu" in iface and len(iface["x"]):
         lines += summary_lines(iface, fn, fr)
     return "\n".join(lines)
+
+
+# --- Fronts from the exact event record ------------------------------------------------------------
+# A tip reaches a site at that site's break step, so arrival times are exact to dt, not to the frame
+# interval.  The grouping is ``chains``' rule applied step by step: the sites that break in one step form
+# contiguous runs, and a run extends a chain when it covers the site just beyond its tip and the chain is
+# alive (its tip bond still broken when the step began, or its last advance at most ``max_gap`` ago).
+
+EVENT_BREAK = 1
+
+
+def _event_chains(ev: dict, n_sites: int, max_gap: float) -> tuple[list[_Chain], dict, dict]:
+    """Break events grouped into fronts, step by step; returns (chains, time of each step that has events,
+    {(chain id, site): broken-zone width behind the tip, in sites, when the tip reached the site})."""
+    steps, sites, kinds, times = ev["step"], ev["site"], ev["kind"], ev["time"]
+    broken = np.zeros(n_sites, bool)        # the bond state as the step began: every site bonded at first
+    out: list[_Chain] = []
+    t_of: dict[int, float] = {}
+    widths: dict = {}
+    ahead: dict[int, list] = {}            # site -> chains whose tip it is next to (hi + 1 or lo - 1)
+    if len(steps) == 0:
+        return out, t_of, widths
+    cut = np.flatnonzero(np.diff(steps)) + 1
+    for a, b in zip(np.r_[0, cut], np.r_[cut, len(steps)]):
+        step = int(steps[a])
+        t_of[step] = float(times[a])
+        new = np.unique(sites[a:b][kinds[a:b] == EVENT_BREAK])
+        grown = []
+        for lo, hi in _runs(new):
+            best, side = None, 0
+            for s in range(lo, hi + 1):
+                for c in ahead.get(s, ()):
+                    sd = c.extends(lo, hi)
+                    if not sd or c is best:
+                        continue
+                    tip = c.hi if sd > 0 else c.lo
+                    alive = broken[tip] or t_of[step] - t_of[c.last] <= max_gap
+                    if alive and (best is None or c.last > best.last):
+                        best, side = c, sd
+            if best is None:
+                best = _Chain(lo, hi, step)
+                out.append(best)
+                added = range(lo, hi + 1)
+            else:
+                added = range(best.hi + 1, hi + 1) if side > 0 else range(lo, best.lo)
+                for key in (best.hi + 1, best.lo - 1):
+                    lst = ahead.get(key)
+                    if lst is not None and best in lst:
+                        lst.remove(best)
+                best.grow(side, lo, hi, step)
+            for key in ((best.hi + 1,) if best.d > 0 else (best.lo - 1,) if best.d < 0 else
+                        (best.hi + 1, best.lo - 1)):
+                ahead.setdefault(key, []).append(best)
+            grown.append((best, list(added)))
+        for e in range(a, b):
+            broken[sites[e]] = kinds[e] == EVENT_BREAK
+        for c, added in grown:               # the broken zone behind the tip once the step's events are in
+            site, step_back = (c.hi, -1) if c.d >= 0 else (c.lo, 1)
+            w = 0
+            while 0 <= site < n_sites and broken[site]:
+                w += 1
+                site += step_back
+            for s in added:
+                widths[(id(c), s)] = w
+    return out, t_of, widths
+
+
+def _window_speed(tt: np.ndarray, xx: np.ndarray, d: int, res: float, m: int) -> np.ndarray:
+    """Local tip speed at each site: ``_fit_speed`` over ``m`` consecutive sites of the path, centred on the
+    site where the path allows and shifted inward near its ends (every fit spans ``m`` sites when the path
+    has as many)."""
+    n = len(xx)
+    v = np.empty(n)
+    for j in range(n):
+        lo = min(max(0, j - m // 2), max(n - m, 0))
+        v[j] = _fit_speed(xx[lo:lo + m], tt[lo:lo + m], d, res)
+    return v
+
+
+def _segments(idx: np.ndarray) -> list[tuple[int, int]]:
+    """Contiguous runs [i, j] of a sorted array of positions along a tip path."""
+    return _runs(idx)
+
+
+def _stretches(idx, s, xx, tt, steps, v) -> list[dict]:
+    out = []
+    for i, j in _segments(np.flatnonzero(idx)):
+        vv = np.abs(v[i:j + 1])
+        vv = vv[np.isfinite(vv)]
+        out.append({"sites": [int(s[i]), int(s[j])], "x": [float(xx[i]), float(xx[j])],
+                    "t": [float(tt[i]), float(tt[j])], "n_sites": int(j - i + 1),
+                    "n_steps": int(len(np.unique(steps[i:j + 1]))),
+                    "max_speed": float(vv.max()) if len(vv) else None})
+    return out
+
+
+def _event_front(c: _Chain, iface: dict, h: int, t_of: dict, widths: dict, windows: dict) -> Front:
+    """One front from its chain of exact arrival steps (see ``Front``)."""
+    ev = iface["events"]
+    res, c_s, c_l = ev["dt"], ev["c_s"], ev["c_l"]
+    x = iface["x"]
+    d = c.d
+    order = sorted(c.arrival, reverse=(d < 0))
+    s = np.array(order)
+    steps = np.array([c.arrival[i] for i in order])
+    tt, xx = np.array([t_of[k] for k in steps]), x[s]
+    n = len(s)
+    supershear, bursts = [], []
+    if d != 0:
+        v = _window_speed(tt, xx, d, res, 2 * h + 1)
+        fast = np.abs(v) > c_l            # a fit above c_l: breaks too close in time for any signal
+        bursts = _stretches(fast, s, xx, tt, steps, np.full(n, np.nan))
+        v = np.where(fast, np.nan, v)
+        supershear = _stretches(np.abs(v) > c_s, s, xx, tt, steps, v)
+        span_t = tt[-1] - tt[0]
+        mean = (xx[-1] - xx[0]) / span_t if span_t > 0 else math.nan
+        if abs(mean) > c_l:
+            mean = math.nan
+        lo, hi = int(0.2 * n), max(int(0.8 * n), int(0.2 * n) + 2)
+        steady = abs(_fit_speed(xx[lo:hi], tt[lo:hi], d, res))
+        if steady > c_l:
+            steady = math.nan
+        finite = np.isfinite(v)
+        early = float(np.median(np.abs(v[: max(1, n // 2)][finite[: max(1, n // 2)]]))) \
+            if finite[: max(1, n // 2)].any() else math.nan
+        accel_at = np.flatnonzero(np.abs(np.nan_to_num(v)) > ACCEL_FACTOR * early) if math.isfinite(early) else []
+        accel = float(xx[accel_at[0]]) if len(accel_at) else None
+        vmax = float(v[int(np.nanargmax(np.abs(v)))]) if finite.any() else math.nan
+    else:
+        v = np.full(n, np.nan)
+        mean = vmax = steady = math.nan
+        accel = None
+    w = np.array([widths.get((id(c), int(i)), 1) for i in s], float)
+    kind = "pulse" if n > 1 and w[-1] < n else "crack"
+
+    du, dv, ub, vb = (np.full(n, np.nan) for _ in range(4))
+    if "ux" in iface and "uy" in iface and len(iface["t"]):
+        ux, uy = iface["ux"], iface["uy"]
+        for j in range(n):
+            kk, site = c.frame_of[int(s[j])], int(s[j])
+            k_lo, k_hi = windows[site][kk]
+            du[j] = ux[k_hi, site] - ux[k_lo, site]
+            dv[j] = uy[k_hi, site] - uy[k_lo, site]
+            behind = int(s[j - 1]) if j else site
+            ub[j] = ux[kk, behind] - ux[0, behind]
+            vb[j] = uy[kk, behind] - uy[0, behind]
+
+    def med(a):
+        a = a[np.isfinite(a)]
+        return float(np.median(a)) if len(a) else math.nan
+
+    tip = {"t": tt.astype(float), "x": xx.astype(float), "v": v, "w": w, "du": du, "dv": dv,
+           "u_behind": ub, "v_behind": vb, "step": steps.astype(np.int64)}
+    return Front(float(tt[0]), float(xx[0]), int(d), kind, float(mean), vmax, float(steady), accel,
+                 med(w), med(du), med(dv), tip, resolution=float(res), fit_sites=2 * h + 1,
+                 supershear=supershear, bursts=bursts)
+
+
+def event_fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5, window: int = 2) -> list[Front]:
+    """``fronts`` from the exact event record ``iface["events"]``: arrival times resolved to dt.
+
+    Local speeds are fitted over 2 ``window`` + 1 sites.  A fit above the top block's c_l is no speed: the
+    sites broke too close in time for any signal to have run between them (a burst of near-simultaneous
+    breaks); it is reported in ``Front.bursts`` with its sites and times and left out of every speed.
+    Local speeds above c_s are reported in ``Front.supershear``.  The slip and the displacement behind the
+    tip are read off the frames (the first frame after the break)."""
+    ev = iface["events"]
+    kept_all, t_of, widths = _event_chains(ev, len(iface["x"]), max_gap)
+    kept = [c for c in kept_all if len(c.arrival) >= min_sites]
+    # The first frame that shows each break (a frame records the bonds as they entered its step).
+    fsteps = iface.get("step")
+    nf = len(iface["t"])
+    for c in kept:
+        if fsteps is not None and nf:
+            c.frame_of = {i: int(min(np.searchsorted(fsteps, k, side="right"), nf - 1)) for i, k in c.arrival.items()}
+        else:
+            c.frame_of = {i: 0 for i in c.arrival}
+    framed = []
+    for c in kept:                            # the frame-indexed view ``_slip_windows`` works on
+        fc = _Chain.__new__(_Chain)
+        fc.arrival = c.frame_of
+        framed.append(fc)
+    windows = _slip_windows(framed, nf) if nf else {}
+    out = [_event_front(c, iface, window, t_of, widths, windows) for c in kept]
+    out.sort(key=lambda f: (f.nucleation_time, f.nucleation_x))
+    return out

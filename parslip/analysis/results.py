@@ -11,6 +11,7 @@ asked for.
     run = parslip.open("out/push.vtkhdf")
     run.interface["ux"]          # [frames, sites], in l
     run.times                    # interface frame times, l/c_r
+    run.events                   # every bond break and re-formation, exact to the time step
     mesh = run.snapshot_at(30.0) # pyvista UnstructuredGrid nearest t = 30 l/c_r
     [f.nucleation_time for f in run.fronts()]
     run.mu, run.mu_s, run.static_peak, run.precursors()   # friction (analysis.friction)
@@ -80,6 +81,22 @@ class Run:
     def x(self) -> np.ndarray:
         """Interface site positions, in l: 0 rear edge, 1 front edge."""
         return self.interface["x"]
+
+    @property
+    def events(self) -> dict | None:
+        """Every bond break and re-formation, exact to the time step (``/interface/events``): arrays ``step``
+        (drive steps, negative before the drive), ``time`` (l/c_r), ``site``, ``kind`` (1 break, 2
+        re-formation), ``partner`` (substrate column), sorted by step, site, kind; with ``dt`` (l/c_r per
+        step), ``c_s``, ``c_l`` (c_r) and ``site_column0``.  None for a file written before events existed."""
+        return self.interface.get("events")
+
+    def replay(self) -> tuple[np.ndarray, np.ndarray]:
+        """(intact, partner) [frames, sites] rebuilt from the events alone (``contract.replay_events``): equal
+        to ``interface["intact"]`` and ``interface["partner"]`` for a complete record."""
+        if self.events is None:
+            raise ConfigError(f"RUN {self.path!r}: written before bond events existed; accepted: a run file with "
+                              f"/interface/events")
+        return contract.replay_events(self.events, len(self.x), self.interface["step"])
 
     def frame_at(self, t: float) -> int:
         """Index of the interface frame nearest time ``t`` (l/c_r)."""

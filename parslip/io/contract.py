@@ -95,8 +95,9 @@ def read_interface(path: str) -> dict:
     """The interface record of a run file: every dataset above, cut to the frames written.
 
     Returns a dict of numpy arrays keyed by dataset name (``t`` is an alias of
-    ``time``).  Datasets a file does not hold (older files have no tractions
-    or forces) are left out.
+    ``time``), and ``events``: the bond events (``read_events``; None for a
+    file written before events existed).  Datasets a file does not hold (older
+    files have no tractions or forces) are left out.
     """
     import h5py
 
@@ -108,12 +109,14 @@ def read_interface(path: str) -> dict:
             if name in g:
                 out[name] = g[name][:n] if per_frame or name in PER_FRAME_1D else g[name][...]
         out["t"] = out["time"]
-        return out
+    out["events"] = read_events(path)
+    return out
 
 
 def read_events(path: str) -> dict | None:
     """The bond events of a run file (``EVENT_DATASETS``, cut to ``events_written``), with the attribute
-    ``site_column0`` as an int; None for a file written before events existed."""
+    ``site_column0``, the time of one step ``dt`` (l/c_r: the resolution of every event time) and the top
+    block's wave speeds ``c_s`` and ``c_l`` (c_r); None for a file written before events existed."""
     import h5py
 
     with h5py.File(path, "r") as f:
@@ -123,6 +126,10 @@ def read_events(path: str) -> dict | None:
         n = int(g.attrs.get("events_written", 0))
         out = {name: g[name][:n] for name in EVENT_DATASETS}
         out["site_column0"] = int(g.attrs["site_column0"])
+        a = f.attrs
+        # The time of one step (the events' resolution) and the top block's wave speeds, in l/c_r and c_r.
+        out["dt"] = float(a["dt"]) * float(a["c_r"]) / float(a["l"])
+        out["c_s"], out["c_l"] = float(a["c_s"]) / float(a["c_r"]), float(a["c_l"]) / float(a["c_r"])
         return out
 
 

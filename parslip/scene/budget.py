@@ -51,12 +51,18 @@ def bulk_cells(lat: Lattice) -> int:
                for i, b in enumerate(lat.blocks) if lat.numbered[i] and b.rows)
 
 
+# Bytes of one bond event in the run file: step 8, time 8, site 4, kind 1, partner 4.
+EVENT_FILE_BYTES = 25
+
+
 def output_bytes(st) -> dict:
     """Bytes of data in the run file: {'interface': ..., 'snapshots': ..., 'total': ...}.
 
     interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame for each
-    of time, friction_force, drive_force and mu + 8 per site (x); snapshots: each holds every node (72 B) and every bond as a line cell (27 B:
-    bulk bonds and one per interface site) and a few offsets.
+    of time, step, friction_force, drive_force and mu + 8 per site (x); snapshots: each holds every node
+    (72 B) and every bond as a line cell (27 B: bulk bonds and one per interface site) and a few offsets.
+    The bond events add ``EVENT_FILE_BYTES`` per event on top: how many the run makes depends on its
+    physics, so they are not in the total.
     """
     lat = st.lattice
     frames, sites = st.n_frames, lat.n_top_sites
