@@ -73,7 +73,7 @@ def test_slip_behind_tips_subtracts_the_drive_to_the_previous_nucleation(small_r
     np.testing.assert_allclose(du, fr[1].tip["u_behind"] - run.v0 * fr[0].nucleation_time)
     # the site behind the tip at its arrival: read it straight from the interface record
     j = 5
-    k = run.frame_at(fr[1].tip["t"][j])
+    k = fr[1].tip["frame"][j]                   # the first frame that shows the tip's break
     s = figures.site_index(run, fr[1].tip["x"][j - 1])
     assert fr[1].tip["u_behind"][j] == run.interface["ux"][k, s] - run.interface["ux"][0, s]
     assert dv[j] == run.interface["uy"][k, s] - run.interface["uy"][0, s]
@@ -85,8 +85,8 @@ def test_passages_mark_each_front_at_a_site(small_run):
     marks = figures.passages(run, s)
     crossing = [i for i, f in enumerate(run.fronts()) if f.tip["x"].max() >= run.x[s]]
     assert [i for i, _ in marks] == crossing
-    for _, t in marks:                                              # the bond breaks in that frame
-        k = run.frame_at(t)
+    for _, t in marks:                              # the bond breaks at t, between frames k - 1 and k
+        k = int(np.searchsorted(run.times, t, side="right"))
         assert run.interface["intact"][k, s] == 0 and run.interface["intact"][k - 1, s] == 1
 
 

@@ -56,6 +56,9 @@ class Front:
                midpoints in time to the neighbouring fronts' passages there (``_slip_windows``)
       u_behind, v_behind   displacement of the site just behind the tip when the tip
                arrives, from its value at t = 0 (the loaded equilibrium), in l (Sec. 3.4)
+      frame    the first interface frame that shows the site broken (the frame the slip and
+               u_behind are read at)
+      step     (from events) the drive step of the site's break: t = step dt exactly
     """
     nucleation_time: float
     nucleation_x: float
@@ -289,7 +292,7 @@ def _front(c: _Chain, iface: dict, h: int, windows: dict) -> Front:
         return float(np.median(a)) if len(a) else math.nan
 
     tip = {"t": tt.astype(float), "x": xx.astype(float), "v": v, "w": w, "du": du, "dv": dv,
-           "u_behind": ub, "v_behind": vb}
+           "u_behind": ub, "v_behind": vb, "frame": k.astype(np.int64)}
     return Front(float(tt[0]), float(xx[0]), int(d), kind, float(mean), vmax, float(steady), accel,
                  med(w), med(du), med(dv), tip, resolution=dt_frame, fit_sites=2 * h + 1)
 
@@ -545,7 +548,8 @@ def _event_front(c: _Chain, iface: dict, h: int, t_of: dict, widths: dict, windo
         return float(np.median(a)) if len(a) else math.nan
 
     tip = {"t": tt.astype(float), "x": xx.astype(float), "v": v, "w": w, "du": du, "dv": dv,
-           "u_behind": ub, "v_behind": vb, "step": steps.astype(np.int64)}
+           "u_behind": ub, "v_behind": vb, "step": steps.astype(np.int64),
+           "frame": np.array([c.frame_of[int(i)] for i in s], np.int64)}
     return Front(float(tt[0]), float(xx[0]), int(d), kind, float(mean), vmax, float(steady), accel,
                  med(w), med(du), med(dv), tip, resolution=float(res), fit_sites=2 * h + 1,
                  supershear=supershear, bursts=bursts)

@@ -6,7 +6,8 @@ Measures, in this order: imports, deriving the scene (omega_max), building
 the rank's state, the first compiled call (loading the compiled loop from
 numba's cache, or compiling it), then a warm-up and ``--seconds`` of the
 drive phase on the whole run path (interface bonds, damping, the driven
-face, interface frames written at the scene's cadence to a scratch file).
+face, interface frames and bond events written at the scene's cadence to
+a scratch file).
 The load is applied at once (no ramp or settle), so timing starts in the
 drive.  Prints one JSON line on rank 0.
 """
@@ -44,16 +45,24 @@ def scene_at(l: int, mode: str, precision: str, extra=()) -> dict:
 
 
 class _TimedWriter:
-    """Output that also times its interface-frame writes."""
+    """Output that also times its interface-frame and bond-event writes."""
 
     def __init__(self, out):
         self.out, self.seconds, self.frames = out, 0.0, 0
+        self.event_seconds, self.events = 0.0, 0
 
     def interface_frames(self, k0, count, frames, times):
         t = time.perf_counter()
         self.out.interface_frames(k0, count, frames, times)
         self.seconds += time.perf_counter() - t
         self.frames += count
+
+    def interface_events(self, k0, *args):
+        t = time.perf_counter()
+        total = self.out.interface_events(k0, *args)
+        self.event_seconds += time.perf_counter() - t
+        self.events += total - k0
+        return total
 
     def snapshot(self, *a):
         self.out.snapshot(*a)
@@ -92,6 +101,7 @@ def main():
     sim.diag.timers[:] = 0
     c0 = sim.counters.copy()
     writer.seconds, writer.frames = 0.0, 0
+    writer.event_seconds, writer.events = 0.0, 0
     comm.Barrier()
     t = time.perf_counter()
     sim.run(writer, until=sim.n + steps)
@@ -119,6 +129,7 @@ def main():
             "node_updates_per_s": n_nodes * steps / wall,
             "phases_us_per_step": allphases, "exchange_us_per_step": max(p["post"] + p["complete"] for p in allphases),
             "frames_written": writer.frames, "frame_write_us": writer.seconds / max(writer.frames, 1) * 1e6,
+            "events_written": writer.events, "event_write_us_per_step": writer.event_seconds / steps * 1e6,
             "startup_s": {"imports": T_IMPORTS, "derive": t_derive, "build": t_build, "first_call": t_first},
             "omega_method": st.omega_method, "breaks": int(events[0]), "reforms": int(events[1]),
             "peak_rss_bytes": rss, "bytes_per_node": max(rss) / max(owned)}), flush=True)
