@@ -5,6 +5,7 @@ import pytest
 
 from helpers import SMALL, reference, require, run_cli, scene, simulation, small_toml, datasets
 from parslip.engine.kernels import interface as ik
+from parslip.model.interface import PARTNER
 from parslip.model.lattice import TOP
 from parslip.scene.derive import derive
 
@@ -82,26 +83,27 @@ def test_wide_gap_rebonds_to_the_nearest_free_site_even_two_columns_away():
     g = sim.state.iface.geom
     for _ in range(st.n_drive):
         s = sim.state
-        partner_before = s.iface.partner.copy()
+        partner_before = s.iface.bonds[PARTNER].astype(np.int64)
         _, _, tx, _ = s.level(sim.n)
         ux = tx[1].copy()
         sim.step()
         lo, hi = g.tlo, g.thi
-        new = [j for j in range(lo, hi) if s.iface.partner[j] >= 0 and s.iface.partner[j] != partner_before[j]]
+        now = s.iface.bonds[PARTNER].astype(np.int64)
+        new = [j for j in range(lo, hi) if now[j] >= 0 and now[j] != partner_before[j]]
         if not new:
             continue
         # Recompute the claims at the state the step started from (level n - 1 now holds u(n - 1)).
         sim.n -= 1
         taken = np.zeros(g.bhi + 1, bool)
         for j in range(lo, hi):
-            p = s.iface.partner[j]
+            p = int(s.iface.bonds[PARTNER, j])
             if p >= 0 and j not in new:
                 taken[p - g.bbase] = True
         for j in new:
-            assert s.iface.partner[j] == _nearest_free(sim, j, taken), j
-            taken[s.iface.partner[j] - g.bbase] = True
+            assert int(s.iface.bonds[PARTNER, j]) == _nearest_free(sim, j, taken), j
+            taken[int(s.iface.bonds[PARTNER, j]) - g.bbase] = True
             formed += 1
-            far += abs(s.iface.partner[j] - round(j + g.tbase + ux[j])) >= 2
+            far += abs(int(s.iface.bonds[PARTNER, j]) - round(j + g.tbase + ux[j])) >= 2
         sim.n += 1
     assert formed > 10 and far > 0, (formed, far)
 
@@ -128,7 +130,7 @@ def test_a_bond_out_of_reach_is_caught_not_skipped():
     s = sim.state
     g = s.iface.geom
     j = g.town0 + 3
-    s.iface.partner[j] = int(g.bbase + g.bhi) + 5          # beyond the stored substrate columns
+    s.iface.bonds[PARTNER, j] = int(g.bbase + g.bhi) + 5          # beyond the stored substrate columns
     bx, by, tx, ty = s.level(0)
     br = g.brow
     s.iface.reach[0] = -1

@@ -15,8 +15,8 @@ import pytest
 from helpers import SMALL, WRITERS, datasets, require, run_cli, scene, small_toml
 from parslip.engine.simulation import Simulation
 from parslip.model.lattice import Lattice
-from parslip.parallel.exchange import COMPLETE, POST, build_plan
-from parslip.parallel.halo_mpi import mpi_exchange as exchange
+from parslip.parallel.exchange import build_plan
+from parslip.parallel.halo_mpi import mpi_complete, mpi_post
 from parslip.parallel.layout import PAD, build_layout, column_cost, interface_reach, partition
 from parslip.scene.derive import derive
 
@@ -54,9 +54,9 @@ def test_halo_exchange_by_global_id():
     tx = np.where(owned, 1000.0 + gid, -1.0)
     ty = -tx
     e = np.zeros((0, 0))
-    assert exchange(POST, plan, e, e, tx, ty, np.zeros(B.width, np.int64), np.zeros(B.width), np.zeros(8, np.int64)) == 0
-    assert exchange(COMPLETE, plan, e, e, tx, ty, np.zeros(B.width, np.int64), np.zeros(B.width),
-                    np.zeros(8, np.int64)) == 0
+    bonds = np.zeros((2, B.width))
+    assert mpi_post(plan, e, e, tx, ty, bonds) == 0
+    assert mpi_complete(plan, e, e, tx, ty, bonds) == 0
     halo_col = 5 if comm.rank == 0 else 4
     halo = (gid >= 0) & (cols[None, :] == halo_col)
     assert halo.sum() == 4

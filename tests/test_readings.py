@@ -5,9 +5,10 @@ import pytest
 from helpers import SMALL, scene, simulation
 from parslip.engine.kernels import interface as ik
 from parslip.errors import ConfigError
+from parslip.model.interface import PARTNER
 from parslip.model.lattice import TOP
 from parslip.model.physics import Material, born_stiffness, cl_over_cs
-from parslip.scene.derive import derive, rebond_within
+from parslip.scene.derive import derive
 
 
 def _update(sim):
@@ -17,7 +18,7 @@ def _update(sim):
     g = s.iface.geom
     br = g.brow
     ik.update(0, tx[1], ty[1], bx[br], by[br], s.iface)
-    return s.iface.partner
+    return s.iface.bonds[PARTNER].astype(np.int64)
 
 
 def test_rebond_within_sets_the_largest_rebonding_length():
@@ -28,14 +29,15 @@ def test_rebond_within_sets_the_largest_rebonding_length():
         sim = simulation(SMALL, **{"interface.rebond_within": within})
         s = sim.state
         j = s.iface.geom.town0 + 5
-        facing = s.iface.partner[j]
-        s.iface.partner[j] = -1
+        facing = int(s.iface.bonds[PARTNER, j])
+        s.iface.bonds[PARTNER, j] = -1
         _, _, _, ty = s.level(0)
         ty[1, j] = 0.1
         got[within] = (_update(sim)[j], facing)
     assert got[0.0][0] == -1
     assert got[0.65][0] == got[0.65][1]
-    assert rebond_within(scene()) == 0.5 and rebond_within(scene(**{"interface.rebond_within": 0.8})) == 0.8
+    length = lambda **kw: derive(scene(**kw)).law.rebond_length            # noqa: E731
+    assert length() == 0.5 and length(**{"interface.rebond_within": 0.8}) == 0.8
 
 
 @pytest.mark.parametrize("rule, expect", [("nearest", "next"), ("facing", "none")])
@@ -47,9 +49,9 @@ def test_rebond_facing_or_nearest(rule, expect):
     s = sim.state
     assert sim.setup.reach.window == 2
     j = s.iface.geom.town0 + 5
-    q_j, q_next = s.iface.partner[j], s.iface.partner[j + 1]
-    s.iface.partner[j] = -1
-    s.iface.partner[j + 1] = q_j
+    q_j, q_next = int(s.iface.bonds[PARTNER, j]), int(s.iface.bonds[PARTNER, j + 1])
+    s.iface.bonds[PARTNER, j] = -1
+    s.iface.bonds[PARTNER, j + 1] = q_j
     p = _update(sim)
     assert p[j + 1] == q_j
     assert p[j] == (q_next if expect == "next" else -1)

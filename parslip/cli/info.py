@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from ..errors import ConfigError
 from ..scene import advice, budget, presets
-from ..scene.limits import closing_load
 from ..scene.load import load
 
 LABEL = 17
@@ -68,11 +67,11 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
         out.append(_line("substrate", f"k_n = {mat.kn_bottom:.6g}, k_t = {mat.kt_bottom:.6g}: c_l = {cl_b:.6g}, "
                                       f"c_s = {cs_b:.6g}" + (" (rigid: only its interface sites, fixed)"
                                                              if lat.rigid else "")))
-        out.append(_line("interface", f"k_x = {s['interface.kx']:g}, k_y = {s['interface.ky']:g}, delta0 = "
-                                      f"{s['interface.delta0']:g} a, delta_b = {s['interface.delta_b']:g} a; "
-                                      f"F_N = {s['load.FN']:g} (the gap closes at N k_y delta0 = "
-                                      f"{closing_load(s):.6g}): mean gap at rest "
-                                      f"{s['interface.delta0'] - s['load.FN'] / (top.cols * s['interface.ky']):.4g} a"))
+        law = st.law
+        out.append(_line("interface", f"k_x = {law.kx:g}, k_y = {law.ky:g}, delta0 = {law.delta0:g} a, delta_b = "
+                                      f"{law.delta_b:g} a; F_N = {s['load.FN']:g} (the gap closes at N k_y delta0 = "
+                                      f"{law.closing_load(top.cols):.6g}): mean gap at rest "
+                                      f"{law.delta0 - s['load.FN'] / (top.cols * law.ky):.4g} a"))
     out += [
         _line("wave speeds", f"c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})"),
         _line("Rayleigh speed", f"c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)"),

@@ -13,9 +13,9 @@ u(n-1) and receives u(n+1)):
  2. interface bonds: break, re-form, forces (``kernels.interface``), on every
     local interface site, OWNED and HALO; check that the halo still covers them;
  3. the schedule's EARLY tasks: the rows and columns peers keep as HALO;
- 4. ``exchange(POST)``: send them with the bond state, post the receives;
- 5. the LATE tasks, while messages travel;
- 6. ``exchange(COMPLETE)``: HALO copies now hold u(n+1) and the bonds of step n.
+ 4. ``post``: send them with the bond state, post the receives;
+ 5. the LATE tasks, while messages travel (``progress`` halfway);
+ 6. ``complete``: HALO copies now hold u(n+1) and the bonds of step n.
 
 A driven node is first updated like any other; the drive then sets its x to
 the prescribed value and keeps the force that took (``drive_force``) in the
@@ -31,12 +31,12 @@ only where every rank returns:
     every rank (sized from the largest slab's site count, ``Simulation``),
     and frames are recorded at the same steps everywhere;
   - STOPPED, when the flags, agreed every ``check_every`` steps with one
-    ``exchange(REDUCE)``, say some rank found a problem;
+    ``reduce_max``, say some rank found a problem;
   - EVENTS_FULL, when the same agreement says some rank holds more than
     ``event_limit`` bond events: the record is sized so that it cannot
     overflow before the next agreement (2 events per OWNED site per step).
 The exchange plan is passed in: on one rank it is a ``NullPlan`` and every
-exchange is a no-op that links no MPI (``parallel.exchange``).
+exchange phase is a no-op that links no MPI (``parallel.exchange``).
 
 Parameters travel as named tuples (``Params``, ``Schedule``, ``Iface``,
 ``Frames``, ``Diag``), never as numbered slots; the few int arrays that must
@@ -48,7 +48,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ..parallel.exchange import COMPLETE, POST, PROGRESS, REDUCE, exchange
+from ..parallel.exchange import complete, post, progress, reduce_max
 from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, NO_DOWN, NODES, PAD, ROWS
 from .kernels import interface as ik
 from .kernels.clock import now_ns
@@ -187,7 +187,7 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, drive, dri
 @njit(cache=True, _nrt=False)
 def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
-    move the halo messages halfway through (``exchange(PROGRESS)``, a no-op on one rank)."""
+    move the halo messages halfway through (``progress``, a no-op on one rank)."""
     tasks = sched.tasks
     pb = sched.ptr[phase, 0]            # the substrate (BOTTOM) block
     pt = sched.ptr[phase, 1]            # the sliding (TOP) block
@@ -197,7 +197,7 @@ def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, 
         _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y,
               iface.zeros, drive, 0, shift, gy)
     if phase == LATE:
-        exchange(PROGRESS, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, iface.counters)
+        progress(plan)
     if pb[END] > pb[NODES]:
         _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, drive,
                0, shift, gy)
@@ -293,11 +293,11 @@ def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
     t1 = now_ns(clk) if timed else 0
     _tasks(EARLY, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
     t2 = now_ns(clk) if timed else 0
-    err = exchange(POST, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, flags)
+    err = post(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     t3 = now_ns(clk) if timed else 0
     _tasks(LATE, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
     t4 = now_ns(clk) if timed else 0
-    err |= exchange(COMPLETE, plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.partner, iface.x0, flags)
+    err |= complete(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     if timed:
         t5 = now_ns(clk)
         tm[T_IFACE] += t1 - t0
@@ -382,7 +382,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
             diag.flags[L_EVENTS] = iface.events.count[0]
             for i in range(g.shape[0]):
                 g[i] = diag.flags[i]
-            exchange(REDUCE, plan, lv.bx0, lv.by0, lv.tx0, lv.ty0, iface.partner, iface.x0, g)
+            reduce_max(plan, g)
             tm[T_CHECK] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
             beat[BEAT_STEP] = n + 1
             if g[L_BITS] != 0:

@@ -13,6 +13,7 @@ import numpy as np
 
 from .kernels import reference as kernels
 from ..errors import NonFiniteError
+from ..model.interface import REFORM_ZERO
 from ..model.lattice import DIRECTIONS, TOP
 from ..model.physics import DENSITY
 from ..scene.derive import Setup
@@ -44,9 +45,11 @@ class Simulation:
         s, lat, mat = setup.scene, setup.lattice, setup.material
         if lat.rigid:
             raise NotImplementedError("the reference implementation has no rigid substrate")
-        for key, default in (("drive.hold", "x"), ("interface.rebond", "nearest"), ("interface.rebond_within", 0.0)):
-            if s.get(key, default) != default:
-                raise NotImplementedError(f"the reference implementation has only {key} = {default!r}")
+        if s["drive.hold"] != "x":
+            raise NotImplementedError("the reference implementation has only drive.hold = 'x'")
+        unlike = setup.law.unlike_reference()
+        if unlike:
+            raise NotImplementedError(f"the reference implementation has not {', '.join(unlike)}")
         self.layout = lay = _SerialLayout(lat)
         nodes = lay.nodes
         n_loc, n_own = len(nodes["gid"]), lay.n_owned
@@ -92,11 +95,11 @@ class Simulation:
         self.n = 0
         self._snap_index = {k: j for j, k in enumerate(setup.snapshot_steps)}
         self.first_bad = None      # (step, local index) of the first non-finite update here
-        p = s
-        self.delta0, self.delta_b = p["interface.delta0"], p["interface.delta_b"]
-        self.kx, self.ky = p["interface.kx"], p["interface.ky"]
-        self.reform_zero = p["interface.reform_x0"] == "zero"
-        self.zeta = p["time.zeta"]
+        law = setup.law
+        self.delta0, self.delta_b = law.delta0, law.delta_b
+        self.kx, self.ky = law.kx, law.ky
+        self.reform_zero = law.reform == REFORM_ZERO
+        self.zeta = s["time.zeta"]
 
     # -------------------------------------------------------------- phases --
     def load_factor(self, n: int) -> float:

@@ -15,6 +15,7 @@ import time
 import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
+from ..model.interface import BOND_ROWS
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
@@ -230,10 +231,11 @@ class Simulation:
                  "drive0": d0, "drive_force": fd}
         if lat.has_interface:
             sl = s.owned_sites()
-            parts.update(site=np.arange(sl.stop - sl.start) + s.site0(), partner=s.iface.partner[sl].copy(),
-                         x0=s.iface.x0[sl].copy())
+            parts["site"] = np.arange(sl.stop - sl.start) + s.site0()
+            parts.update(s.owned_bonds())
         else:
-            parts.update(site=np.zeros(0, np.int64), partner=np.zeros(0, np.int64), x0=np.zeros(0, s.dtype))
+            parts["site"] = np.zeros(0, np.int64)
+            parts.update({name: np.zeros(0, s.dtype) for name in BOND_ROWS})
         return parts
 
     def restore(self, arrays: dict, attrs: dict):
@@ -250,14 +252,12 @@ class Simulation:
         if st.lattice.has_interface:
             sl = s.owned_sites()
             sites = np.arange(sl.stop - sl.start) + s.site0()
-            s.iface.partner[sl] = arrays["partner"][sites]
-            s.iface.x0[sl] = arrays["x0"][sites]
+            s.set_owned_bonds({name: arrays[name][sites] for name in BOND_ROWS})
         if self.comm is not None:
-            from ..parallel.halo_mpi import mpi_exchange
-            from ..parallel.exchange import COMPLETE, POST
+            from ..parallel.halo_mpi import mpi_complete, mpi_post
             bx, by, tx, ty = s.level(n)
-            for phase in (POST, COMPLETE):
-                mpi_exchange(phase, self.plan, bx, by, tx, ty, s.iface.partner, s.iface.x0, self.diag.flags)
+            mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
+            mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
         self.events_written = int(attrs["events_written"])

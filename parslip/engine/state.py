@@ -15,7 +15,7 @@ import numpy as np
 from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
-from ..scene.derive import rebond_within
+from ..model.interface import BOND_ROWS, PARTNER, X0
 from .kernels import interface as ik
 from .loop import Drive, Levels
 
@@ -80,11 +80,15 @@ class State:
 
         # Interface ------------------------------------------------------------
         wt, wb = tl.width, bl.width
-        partner = np.full(wt, -1, np.int64)
+        # The per-site bond state (``model.interface.BOND_ROWS``): every stored site starts bonded to the
+        # substrate site facing it, with x0 = 0.
+        bonds = np.zeros((len(BOND_ROWS), wt), dt)
+        bonds[PARTNER] = -1
         reach = layout.reach
+        law = setup.law
         if lat.has_interface:
             lo, hi = tl.j(tl.stored[0])
-            partner[lo:hi] = np.arange(lo, hi) + tl.base          # each top site faces the bottom site of its column
+            bonds[PARTNER, lo:hi] = np.arange(lo, hi) + tl.base    # each top site faces the bottom site of its column
             br = bl.rows - 1
             blo, bhi = bl.j(bl.stored[br])
             bown0, bown1 = bl.j(bl.owned[br])
@@ -95,17 +99,14 @@ class State:
                                bhi=bhi, bown0=bown0, bown1=bown1, brow=bl.prow(br), window=reach.window,
                                tfirst=tl.span[0], tlast=tl.span[1] - 1, bcols=lat.bottom.cols, rigid=int(lat.rigid),
                                tcover=reach.top_cover, bcover=reach.bottom_cover)
-            consts = ik.Constants(delta0=dt.type(sc["interface.delta0"]), delta_b=dt.type(sc["interface.delta_b"]),
-                                  kx=dt.type(sc["interface.kx"]), ky=dt.type(sc["interface.ky"]),
-                                  reform_zero=sc["interface.reform_x0"] == "zero", drift=dt.type(reach.drift),
-                                  inv_l=dt.type(1.0 / setup.l), traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)),
-                                  rebond=dt.type(rebond_within(sc)),
-                                  facing=sc.get("interface.rebond", "nearest") == "facing")
         else:
             geom = ik.Geometry(*([0] * len(ik.Geometry._fields)))
-            consts = ik.Constants(*([dt.type(0)] * 4), False, *([dt.type(0)] * 4), False)
+        consts = ik.Constants(delta0=dt.type(law.delta0), delta_b=dt.type(law.delta_b), kx=dt.type(law.kx),
+                              ky=dt.type(law.ky), reform=law.reform, rebond=law.rebond, drift=dt.type(reach.drift),
+                              inv_l=dt.type(1.0 / setup.l), traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)),
+                              rebond_length=dt.type(law.rebond_length))
         geom = ik.Geometry(*(int(v) for v in geom))
-        self.iface = ik.Iface(partner=partner, x0=np.zeros(wt, dt), claim=np.zeros(wt, np.int64),
+        self.iface = ik.Iface(bonds=bonds, claim=np.zeros(wt, np.int64),
                               taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
                               exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
                               zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,
@@ -188,10 +189,24 @@ class State:
         return lo - self.setup.lattice.top.col0
 
     def owned_partner(self) -> np.ndarray:
-        return self.iface.partner[self.owned_sites()].copy()
+        """The substrate column each OWNED site is bonded to (-1 broken), int64."""
+        return self.iface.bonds[PARTNER, self.owned_sites()].astype(np.int64)
 
     def owned_x0(self) -> np.ndarray:
-        return self.iface.x0[self.owned_sites()].astype(np.float64)
+        return self.iface.bonds[X0, self.owned_sites()].astype(np.float64)
+
+    def owned_bonds(self) -> dict:
+        """Every row of the OWNED sites' bond state by name (``model.interface.BOND_ROWS``), copies in the
+        state's float type: what a checkpoint holds."""
+        s = self.owned_sites()
+        return {name: self.iface.bonds[r, s].copy() for r, name in enumerate(BOND_ROWS)}
+
+    def set_owned_bonds(self, rows: dict):
+        """Set the OWNED sites' bond state from rows by name (a checkpoint's); HALO copies follow at the
+        next exchange."""
+        s = self.owned_sites()
+        for r, name in enumerate(BOND_ROWS):
+            self.iface.bonds[r, s] = rows[name]
 
     def max_top_slip(self, n: int) -> float:
         """max |u_x| of the OWNED top interface sites at step n (a)."""
@@ -214,15 +229,16 @@ class State:
             bx, by, tx, ty = self.level(n)
             g = self.iface.geom
             s = self.owned_sites()
-            p = self.iface.partner[s]
+            p = self.owned_partner()
             bonded = p >= 0
             j = np.arange(s.start, s.stop)[bonded]
             i = p[bonded] - g.bbase
             br = g.brow
             dx = (j + g.tbase - p[bonded]) + (tx[PAD, j].astype(float) - bx[br, i])
-            dy = sc["interface.delta0"] + (ty[PAD, j].astype(float) - by[br, i])
-            total += float(np.sum(0.5 * sc["interface.kx"] * (dx - self.iface.x0[j]) ** 2 +
-                                  0.5 * sc["interface.ky"] * (dy - sc["interface.delta0"]) ** 2))
+            law = self.setup.law
+            dy = law.delta0 + (ty[PAD, j].astype(float) - by[br, i])
+            total += float(np.sum(0.5 * law.kx * (dx - self.iface.bonds[X0, j]) ** 2 +
+                                  0.5 * law.ky * (dy - law.delta0) ** 2))
             top_row = (self.own_block == TOP) & (self.own_row == lat.top.rows - 1)
             u = self.owned_u(n)
             total -= load * (-sc["load.FN"] / lat.top.cols) * float(u[top_row, 1].sum())

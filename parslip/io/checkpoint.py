@@ -6,7 +6,9 @@ read it back):
   /u, /u_prev     float [nodes, 2]   displacements u(n) and u(n-1), in a (the state's float type)
   /drive0         float [nodes]      x displacement of each node when the drive started (driven nodes)
   /drive_force    float [nodes]      the x-force the drive applied to each driven node in the last step
-  /partner, /x0   int64, float [sites]  interface bonds: substrate site bonded to (-1 broken), rest offset x0
+  /partner, /x0   int64, float [sites]  the bond state of every interface site, one dataset per row of
+                                        ``model.interface.BOND_ROWS`` (here: substrate site bonded to,
+                                        -1 broken; rest offset x0), as ``ROW_DTYPES`` says
   root attributes  the step n, the resolved scene (TOML), omega_max and dt, the output cursor (frames and
                    snapshots written, bond events written), the bond event counters, the run id shared with the output file,
                    the rank count that wrote it, and ``complete`` = 1, set last.
@@ -25,12 +27,15 @@ import os
 import numpy as np
 
 from ..errors import ConfigError
+from ..model.interface import BOND_ROWS, ROW_DTYPES
 
 FORMAT = "parslip checkpoint 3"          # 2: with drive_force; 3: with events_written
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
              "output.buffer_frames", "output.buffer_events", "checkpoint.every", "checkpoint.wall",
              "interface.slip_reach", "run.watchdog")
-DATASETS = ("u", "u_prev", "drive0", "drive_force", "partner", "x0")
+# Datasets by global node id, with their columns (0: one value per node), then one per bond row by site.
+NODE_DATASETS = {"u": 2, "u_prev": 2, "drive0": 0, "drive_force": 0}
+DATASETS = tuple(NODE_DATASETS) + BOND_ROWS
 
 
 def path_for(out: str) -> str:
@@ -113,8 +118,8 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
     if int(attrs.get("complete", 0)) != 1:
         raise ConfigError(f"--restart {path!r}: incomplete checkpoint (the writer stopped before finishing); "
                           f"accepted: a complete checkpoint")
-    want = {"u": (n_nodes, 2), "u_prev": (n_nodes, 2), "drive0": (n_nodes,), "drive_force": (n_nodes,),
-            "partner": (n_sites,), "x0": (n_sites,)}
+    want = {name: (n_nodes, cols) if cols else (n_nodes,) for name, cols in NODE_DATASETS.items()}
+    want.update({name: (n_sites,) for name in BOND_ROWS})
     for name, shape in want.items():
         if shapes.get(name) != shape:
             raise ConfigError(f"--restart {path!r}: dataset /{name} has shape {shapes.get(name)}, this scene needs "
@@ -132,10 +137,10 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
 def write_collective(comm, path: str, parts: dict, attrs: dict, n_nodes: int, n_sites: int) -> None:
     """Collective: every rank's share (``parts``: arrays by global node id "gid" or site index "site",
     from ``Simulation.checkpoint_parts``) gathered on rank 0, which writes them atomically (``write``)."""
-    arrays = {}
-    for name, key, n in (("u", "gid", n_nodes), ("u_prev", "gid", n_nodes), ("drive0", "gid", n_nodes),
-                         ("drive_force", "gid", n_nodes), ("partner", "site", n_sites), ("x0", "site", n_sites)):
-        arrays[name] = gather_global(comm, parts[key], parts[name], n)
+    arrays = {name: gather_global(comm, parts["gid"], parts[name], n_nodes) for name in NODE_DATASETS}
+    for name in BOND_ROWS:
+        rows = parts[name] if ROW_DTYPES[name] is None else parts[name].astype(ROW_DTYPES[name])
+        arrays[name] = gather_global(comm, parts["site"], rows, n_sites)
     err = None
     if comm is None or comm.Get_rank() == 0:
         try:

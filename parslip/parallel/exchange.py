@@ -1,20 +1,22 @@
 """How halo copies are refreshed: the exchange the compiled loop calls, and its plan.
 
-The compiled time loop calls ``exchange(phase, plan, ...)`` and never MPI
-directly; the plan it is passed says who the peers are, and its *type*
-chooses the code numba compiles:
+The compiled time loop calls the phases below and never MPI directly; the
+plan it is passed says who the peers are, and its *type* chooses the code
+numba compiles:
 
 - ``NullPlan`` (one rank): every phase is a no-op.  The loop compiled for it
   references no MPI symbol, so a one-rank run never loads an MPI library.
-- ``halo_mpi.Plan`` (several ranks): phase POST packs the OWNED values each
-  peer keeps as HALO and posts MPI_Irecv and MPI_Isend; COMPLETE waits
-  (MPI_Waitall) and unpacks into the HALO copies; PROGRESS lets MPI move the
-  messages while the loop computes (MPI_Testall); REDUCE takes the MAX of the
-  loop's flags over all ranks (MPI_Allreduce).  ``parallel.halo_mpi`` holds
-  it and is imported only when a communicator with more than one rank is used.
+- ``halo_mpi.Plan`` (several ranks): ``post`` packs the OWNED values each
+  peer keeps as HALO and posts MPI_Irecv and MPI_Isend; ``complete`` waits
+  (MPI_Waitall) and unpacks into the HALO copies; ``progress`` lets MPI move
+  the messages while the loop computes (MPI_Testall); ``reduce_max`` takes
+  the MAX of the loop's flags over all ranks (MPI_Allreduce).
+  ``parallel.halo_mpi`` holds them and is imported only when a communicator
+  with more than one rank is used.
 
 What travels is given by ``parallel.layout``: row segments of positions, and
-the bond state (partner, x0) of the block's interface sites.
+the travelling rows of the bond table (``model.interface.BOND_ROWS``, the
+first ``N_TRAVEL``) of the block's interface sites.
 """
 from __future__ import annotations
 
@@ -23,9 +25,6 @@ from collections import namedtuple
 import numpy as np
 from numba import types
 from numba.extending import overload
-
-# Phases of one exchange.
-POST, COMPLETE, REDUCE, PROGRESS = 0, 1, 2, 3
 
 # One rank: nothing to exchange.  (numba needs a field; ``ranks`` is always 1.)
 NullPlan = namedtuple("NullPlan", "ranks")
@@ -49,27 +48,64 @@ def build_plan(layout, dtype, comm=None):
     return halo_mpi.build_plan(layout, dtype, comm)
 
 
-def exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
-    """One phase of the halo exchange of ``plan``; returns the OR of MPI error codes (0 on one rank).
+def _compiled_only(*args):
+    raise TypeError("the exchange phases run in compiled code; from Python call parslip.parallel.halo_mpi's "
+                    "mpi_post, mpi_complete, mpi_progress, mpi_reduce_max with an MPI plan")
 
-    Compiled code only (the implementation is chosen by the plan's type, see the module docstring);
-    from Python, call ``halo_mpi.mpi_exchange`` with an MPI plan.
-    """
-    raise TypeError("exchange() runs in compiled code; from Python call parslip.parallel.halo_mpi.mpi_exchange")
+
+def post(plan, bx, by, tx, ty, bonds):
+    """Pack and send the OWNED values peers keep as HALO (positions, travelling bond rows); post the
+    receives.  Returns the OR of MPI error codes (0 on one rank).  Compiled code only."""
+    _compiled_only()
+
+
+def complete(plan, bx, by, tx, ty, bonds):
+    """Wait for the messages ``post`` started and unpack them into the HALO copies; returns the OR of MPI
+    error codes (0 on one rank).  Compiled code only."""
+    _compiled_only()
+
+
+def progress(plan):
+    """Let MPI move the posted messages while the loop computes; returns an MPI error code."""
+    _compiled_only()
+
+
+def reduce_max(plan, flags):
+    """``flags`` (int64) becomes its element-wise MAX over all ranks; returns an MPI error code."""
+    _compiled_only()
 
 
 def _is_null(plan) -> bool:
     return isinstance(plan, types.BaseNamedTuple) and plan.instance_class is NullPlan
 
 
-@overload(exchange, inline="always")
-def _exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
+@overload(post, inline="always")
+def _post(plan, bx, by, tx, ty, bonds):
     if _is_null(plan):
-        def nothing(phase, plan, bx, by, tx, ty, partner, x0, flags):
-            return 0
-        return nothing
-    from .halo_mpi import mpi_exchange       # typing the MPI plan: the MPI library is loaded by now
+        return lambda plan, bx, by, tx, ty, bonds: 0
+    from .halo_mpi import mpi_post       # typing the MPI plan: the MPI library is loaded by now
+    return lambda plan, bx, by, tx, ty, bonds: mpi_post(plan, bx, by, tx, ty, bonds)
 
-    def with_mpi(phase, plan, bx, by, tx, ty, partner, x0, flags):
-        return mpi_exchange(phase, plan, bx, by, tx, ty, partner, x0, flags)
-    return with_mpi
+
+@overload(complete, inline="always")
+def _complete(plan, bx, by, tx, ty, bonds):
+    if _is_null(plan):
+        return lambda plan, bx, by, tx, ty, bonds: 0
+    from .halo_mpi import mpi_complete
+    return lambda plan, bx, by, tx, ty, bonds: mpi_complete(plan, bx, by, tx, ty, bonds)
+
+
+@overload(progress, inline="always")
+def _progress(plan):
+    if _is_null(plan):
+        return lambda plan: 0
+    from .halo_mpi import mpi_progress
+    return lambda plan: mpi_progress(plan)
+
+
+@overload(reduce_max, inline="always")
+def _reduce_max(plan, flags):
+    if _is_null(plan):
+        return lambda plan, flags: 0
+    from .halo_mpi import mpi_reduce_max
+    return lambda plan, flags: mpi_reduce_max(plan, flags)

@@ -3,13 +3,16 @@
 Imported only for a communicator of more than one rank (``exchange.build_plan``):
 importing it loads the MPI library mpi4py uses (``parallel.mpi``).
 
-For every peer, POST packs the OWNED values the peer keeps as HALO and posts
-MPI_Irecv and MPI_Isend; COMPLETE waits (MPI_Waitall) and unpacks into the
-HALO copies; PROGRESS tests the requests so MPI moves the messages while the
-loop computes; REDUCE takes the MAX of the loop's flags over all ranks
-(MPI_Allreduce).  One message per peer per step carries every row segment's
-x then y, then the interface sites' partner then x0.  Integers (partners)
-travel as floats: exact below 2^24 even in float32.
+For every peer, ``mpi_post`` packs the OWNED values the peer keeps as HALO
+and posts MPI_Irecv and MPI_Isend; ``mpi_complete`` waits (MPI_Waitall) and
+unpacks into the HALO copies; ``mpi_progress`` tests the requests so MPI
+moves the messages while the loop computes; ``mpi_reduce_max`` takes the MAX
+of the loop's flags over all ranks (MPI_Allreduce).  One message per peer
+per step carries every row segment's x then y, then, for each run of
+interface sites, the travelling rows of the bond table
+(``model.interface.BOND_ROWS[:N_TRAVEL]``) one after the other.  The bond
+table is in the state's float type: integers (partners) are exact below
+2^24 even in float32.
 """
 from __future__ import annotations
 
@@ -17,11 +20,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..model.interface import N_TRAVEL
 from ..model.lattice import BOTTOM
 from . import mpi
-from .exchange import POST, PROGRESS, REDUCE, SEGMENT, SITES, Plan
+from .exchange import SEGMENT, SITES, Plan
 
 TAG = 7
+
+
 def build_plan(layout, dtype, comm=None) -> Plan:
     """Index arrays and buffers of ``layout``'s exchange, in local columns; MPI handles from ``comm``
     (without one, a plan to inspect, e.g. its buffer sizes, not to run)."""
@@ -50,7 +56,7 @@ def build_plan(layout, dtype, comm=None) -> Plan:
     def sizes(seg, ptr, sseg, sptr):
         out = [0]
         for i in range(len(peers)):
-            n = 2 * int(seg["n"][ptr[i]:ptr[i + 1]].sum()) + 2 * int(sseg["n"][sptr[i]:sptr[i + 1]].sum())
+            n = 2 * int(seg["n"][ptr[i]:ptr[i + 1]].sum()) + N_TRAVEL * int(sseg["n"][sptr[i]:sptr[i + 1]].sum())
             out.append(out[-1] + n)
         return np.array(out, np.int64)
 
@@ -78,9 +84,10 @@ def _move(buf, k, a, r, j0, n, out):
 
 
 @njit(cache=True, _nrt=False)
-def _transfer(plan, i, bx, by, tx, ty, partner, x0, out):
+def _transfer(plan, i, bx, by, tx, ty, bonds, out):
     """Peer i's message: pack my OWNED values into the send buffer (``out``), or unpack its values
-    into my HALO copies: every row segment's x then y, then the interface sites' partner then x0."""
+    into my HALO copies: every row segment's x then y, then each run of interface sites' travelling
+    bond rows, one row after the other."""
     if out:
         buf, k, segs, lo, hi = plan.sbuf, plan.sb_ptr[i], plan.ss, plan.ss_ptr[i], plan.ss_ptr[i + 1]
         sites, slo, shi = plan.sts, plan.sts_ptr[i], plan.sts_ptr[i + 1]
@@ -98,58 +105,61 @@ def _transfer(plan, i, bx, by, tx, ty, partner, x0, out):
             k = _move(buf, k, ty, r, j0, n, out)
     for g in range(slo, shi):
         j0, n = sites[g].j0, sites[g].n
-        if out:
-            for j in range(n):
-                buf[k + j] = partner[j0 + j]
-        else:
-            for j in range(n):
-                partner[j0 + j] = np.int64(buf[k + j])
-        k += n
-        for j in range(n):
-            if out:
-                buf[k + j] = x0[j0 + j]
-            else:
-                x0[j0 + j] = buf[k + j]
-        k += n
+        for row in range(N_TRAVEL):
+            k = _move(buf, k, bonds, row, j0, n, out)
 
 
 @njit(cache=True, _nrt=False)
-def mpi_exchange(phase, plan, bx, by, tx, ty, partner, x0, flags):
-    """One phase of the halo exchange of ``plan`` (see the module docstring); returns the OR of MPI error codes.
-
-    POST: MPI_Irecv from every peer, then pack and MPI_Isend to every peer.
-    COMPLETE: MPI_Waitall, then unpack into the HALO copies.
-    REDUCE: ``flags`` becomes its MAX over all ranks.
-    """
-    npeer = plan.peer.shape[0]
+def mpi_reduce_max(plan, flags):
+    """``flags`` becomes its element-wise MAX over all ranks (MPI_Allreduce); returns the MPI error code."""
     h = plan.handles
-    comm, ftype, itype, opmax = h[mpi.H_COMM], h[mpi.H_FLOAT], h[mpi.H_INT64], h[mpi.H_MAX]
-    err = 0
-    if phase == REDUCE:
-        err |= mpi.allreduce(flags.ctypes.data, plan.rflags.ctypes.data, np.int32(flags.shape[0]), itype, opmax,
-                             comm)
-        for i in range(flags.shape[0]):
-            flags[i] = plan.rflags[i]
-        return err
+    err = mpi.allreduce(flags.ctypes.data, plan.rflags.ctypes.data, np.int32(flags.shape[0]), h[mpi.H_INT64],
+                        h[mpi.H_MAX], h[mpi.H_COMM])
+    for i in range(flags.shape[0]):
+        flags[i] = plan.rflags[i]
+    return err
+
+
+@njit(cache=True, _nrt=False)
+def mpi_progress(plan):
+    """MPI_Testall on the posted requests, so MPI moves the messages while the loop computes."""
+    npeer = plan.peer.shape[0]
     if npeer == 0:
         return 0
+    return mpi.testall(np.int32(2 * npeer), plan.req.ctypes.data, plan.rflags.ctypes.data, plan.status.ctypes.data)
+
+
+@njit(cache=True, _nrt=False)
+def mpi_post(plan, bx, by, tx, ty, bonds):
+    """MPI_Irecv from every peer, then pack and MPI_Isend to every peer; returns the OR of MPI error codes."""
+    npeer = plan.peer.shape[0]
+    if npeer == 0:
+        return 0
+    h = plan.handles
+    comm, ftype = h[mpi.H_COMM], h[mpi.H_FLOAT]
     rq = plan.req.ctypes.data
-    if phase == PROGRESS:                 # let MPI move the messages while the loop computes
-        return mpi.testall(np.int32(2 * npeer), rq, plan.rflags.ctypes.data, plan.status.ctypes.data)
     isz = plan.req.itemsize
     fsz = plan.sbuf.itemsize
-    if phase == POST:
-        for i in range(npeer):
-            n = plan.rb_ptr[i + 1] - plan.rb_ptr[i]
-            err |= mpi.irecv(plan.rbuf.ctypes.data + plan.rb_ptr[i] * fsz, np.int32(n), ftype,
-                             np.int32(plan.peer[i]), np.int32(TAG), comm, rq + i * isz)
-        for i in range(npeer):
-            _transfer(plan, i, bx, by, tx, ty, partner, x0, True)
-            n = plan.sb_ptr[i + 1] - plan.sb_ptr[i]
-            err |= mpi.isend(plan.sbuf.ctypes.data + plan.sb_ptr[i] * fsz, np.int32(n), ftype,
-                             np.int32(plan.peer[i]), np.int32(TAG), comm, rq + (npeer + i) * isz)
-    else:
-        err |= mpi.waitall(np.int32(2 * npeer), rq, plan.status.ctypes.data)
-        for i in range(npeer):
-            _transfer(plan, i, bx, by, tx, ty, partner, x0, False)
+    err = 0
+    for i in range(npeer):
+        n = plan.rb_ptr[i + 1] - plan.rb_ptr[i]
+        err |= mpi.irecv(plan.rbuf.ctypes.data + plan.rb_ptr[i] * fsz, np.int32(n), ftype,
+                         np.int32(plan.peer[i]), np.int32(TAG), comm, rq + i * isz)
+    for i in range(npeer):
+        _transfer(plan, i, bx, by, tx, ty, bonds, True)
+        n = plan.sb_ptr[i + 1] - plan.sb_ptr[i]
+        err |= mpi.isend(plan.sbuf.ctypes.data + plan.sb_ptr[i] * fsz, np.int32(n), ftype,
+                         np.int32(plan.peer[i]), np.int32(TAG), comm, rq + (npeer + i) * isz)
+    return err
+
+
+@njit(cache=True, _nrt=False)
+def mpi_complete(plan, bx, by, tx, ty, bonds):
+    """MPI_Waitall on what ``mpi_post`` started, then unpack into the HALO copies; returns the MPI error code."""
+    npeer = plan.peer.shape[0]
+    if npeer == 0:
+        return 0
+    err = mpi.waitall(np.int32(2 * npeer), plan.req.ctypes.data, plan.status.ctypes.data)
+    for i in range(npeer):
+        _transfer(plan, i, bx, by, tx, ty, bonds, False)
     return err

@@ -75,7 +75,7 @@ def warnings(setup) -> list[str]:
             f"time.zeta < c_s/H = {mat.c_s / h:.3g}")
     if st.lattice.has_interface and s["load.FN"] > HEAVY_LOAD * closing_load(s):
         close = closing_load(s)
-        gap = s["interface.delta0"] * (1 - s["load.FN"] / close)
+        gap = st.law.delta0 * (1 - s["load.FN"] / close)
         out.append(
             f"load.FN = {s['load.FN']:g}: {s['load.FN'] / close:.0%} of the load that closes the mean gap "
             f"(N k_y delta0 = {close:.4g}); the mean gap at rest is {gap:.3g} a but single gaps spread about "
@@ -92,7 +92,7 @@ def warnings(setup) -> list[str]:
                 f"the interface is loaded by that wave, not quasi-statically (the paper drives at 1e-4 to "
                 f"1e-2 c_r)")
         if st.lattice.has_interface:
-            d0, db = s["interface.delta0"], s["interface.delta_b"]
+            d0, db = st.law.delta0, st.law.delta_b
             need = math.sqrt(db * db - d0 * d0)
             moved = st.v0 * st.n_drive * st.dt
             if moved < need:

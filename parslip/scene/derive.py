@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 from ..errors import ConfigError
+from ..model.interface import InterfaceLaw
 from ..model.lattice import Lattice
 from ..model.physics import Material
 from ..model.stability import dt_max as _dt_max
@@ -41,6 +42,7 @@ class Setup:
     slip_reach: float        # a
     reach: Reach             # halo widths that serve the slip reach
     precision: str           # "float64" or "float32"
+    law: InterfaceLaw        # the interface bonds: parameters and rules (``model.interface``)
 
     @property
     def n_steps(self) -> int:
@@ -89,12 +91,6 @@ def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float,
     return value
 
 
-def rebond_within(scene: dict) -> float:
-    """Largest length (a) at which a free top node re-bonds: ``interface.rebond_within``, 0 meaning delta0."""
-    w = scene.get("interface.rebond_within", 0.0)
-    return w if w > 0 else scene["interface.delta0"]
-
-
 def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt or a drive the
     engine would take for a blow-up (``limits.check_setup``)."""
@@ -103,9 +99,10 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
                               scene.get("material.kn_spring", "along"))
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
+    law = InterfaceLaw.from_scene(scene)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         scene["interface.kx"], scene["interface.ky"])
+                                         *law.stiffness)
     else:
         omega, method = omega
     limit = _dt_max(omega)
@@ -129,7 +126,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
-               slip_reach=reach, reach=interface_reach(rebond_within(scene), scene["interface.delta_b"], reach),
-               precision=scene["time.precision"])
+               slip_reach=reach, reach=interface_reach(law.rebond_length, law.max_delta_b, reach),
+               precision=scene["time.precision"], law=law)
     limits.check_setup(st)
     return st

@@ -42,6 +42,7 @@ k_t < 0, dt above 2/omega_max) sit beside the code they protect
 from __future__ import annotations
 
 from ..errors import ConfigError
+from ..model.interface import InterfaceLaw
 from ..model.physics import cl_over_cs, rayleigh_ratio
 
 # A node moving this far in one step (a) is taken for a blow-up by the engine's health check.
@@ -50,7 +51,7 @@ RUNAWAY_JUMP = 0.5
 
 def closing_load(scene: dict) -> float:
     """N k_y delta0 (m c^2/a): the total normal load that closes the interface gap at rest."""
-    return scene["lattice.top_cols"] * scene["interface.ky"] * scene["interface.delta0"]
+    return InterfaceLaw.from_scene(scene).closing_load(scene["lattice.top_cols"])
 
 
 def drive_wave(mode: str) -> str:
@@ -72,7 +73,8 @@ def check_scene(s: dict) -> None:
         lim = closing_load(s)
         fn = s["load.FN"]
         if fn >= lim:
-            n, ky, d0 = s["lattice.top_cols"], s["interface.ky"], s["interface.delta0"]
+            law = InterfaceLaw.from_scene(s)
+            n, ky, d0 = s["lattice.top_cols"], law.ky, law.delta0
             raise ConfigError(
                 f"load.FN = {fn!r}: closes the interface gap (mean gap delta0 - F_N/(N k_y) = "
                 f"{d0 - fn / (n * ky):.4g} a with N = {n} sites, k_y = {ky:g}, delta0 = {d0:g}); "

@@ -11,14 +11,17 @@ offset there).  For a top site at column g bonded to bottom site q:
 and the opposite force on the bottom node.  Each step, at positions u(t):
 
 1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b;
-2. each free top site claims the nearest free bottom site within delta0
-   (ties: lower bottom index), looking at the substrate columns within
-   ``window`` of its nearest one (``rebond`` replaces delta0 here; with
-   ``facing`` it looks at the nearest column only);
+2. each free top site claims the nearest free bottom site within the law's
+   re-bonding length (delta0 unless set; ties: lower bottom index), looking
+   at the substrate columns within ``window`` of its nearest one (the rule
+   ``_search_width``: REBOND_FACING looks at the nearest column only);
 3. claims are granted in increasing top-site order, so when two free top
    sites reach the same bottom site the lower global index wins and the
-   other waits a step; a re-formed bond takes x0 = x_ij then (starts
-   unstressed in x), or 0 with ``reform_zero``.
+   other waits a step; a re-formed bond takes its rest offset by the rule
+   ``_rest_offset`` (0, or x_ij: unstressed in x).
+
+The law's parameters and rule codes come from ``model.interface``; each rule
+is one inlined function below, chosen by its code.
 
 Every rank runs this over all its interface sites, OWNED and HALO, in global
 order: HALO copies arrive with their bond state each step, so a rank's own
@@ -31,6 +34,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from ...model.interface import PARTNER, REBOND_FACING, REFORM_ZERO, X0
 from .floats import like
 
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
@@ -50,18 +54,18 @@ BREAK, FORM = 1, 2
 #   tcover, bcover   reach (a) the halo must cover beyond this rank's interest (``layout.Reach``)
 Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow window tfirst tlast "
                                   "bcols rigid tcover bcover")
-# The interface constants, in the state's float type (bools for the re-bonding rules):
-#   delta0, delta_b (a); kx, ky (m c^2/a^2); reform_zero: a re-formed bond starts with x0 = 0;
+# The interface constants (``model.interface.InterfaceLaw``), in the state's float type, the rules as codes:
+#   delta0, delta_b (a); kx, ky (m c^2/a^2); reform (REFORM_*), rebond (REBOND_*) the rules' codes;
 #   drift (a) a substrate site may move from its column; inv_l = 1/l; traction = 1/(a rho c_r^2);
-#   rebond (a) the largest length at which a free site re-bonds (delta0 unless interface.rebond_within);
-#   facing: re-bond only to the facing substrate site (the nearest column), not the nearest free one
-Constants = namedtuple("Constants", "delta0 delta_b kx ky reform_zero drift inv_l traction rebond facing")
+#   rebond_length (a) the largest length at which a free site re-bonds
+Constants = namedtuple("Constants", "delta0 delta_b kx ky reform rebond drift inv_l traction rebond_length")
 # The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
-# the substrate's (bottom sites): partner (global substrate column, -1 broken) and rest offset x0 of each
-# bond; claim and taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom
-# nodes; zeros a row of zeros; counters [BREAKS, FORMS] of OWNED sites; reach[0] the first OWNED site
-# out of the halo's reach (-1 none).
-Iface = namedtuple("Iface", "partner x0 claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach events")
+# the substrate's (bottom sites): bonds, the per-site bond state [row, site] with the rows of
+# ``model.interface.BOND_ROWS`` (partner: global substrate column, -1 broken; x0: rest offset); claim and
+# taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom nodes; zeros a
+# row of zeros; counters [BREAKS, FORMS] of OWNED sites; reach[0] the first OWNED site out of the halo's
+# reach (-1 none).
+Iface = namedtuple("Iface", "bonds claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach events")
 # The event record of one rank: every break and re-formation of an OWNED top site, in the order the loop
 # makes them (by step; within a step the breaks in site order, then the re-formations in site order):
 #   step     the step n whose update made it (absolute, from the start of the ramp)
@@ -77,6 +81,27 @@ Events = namedtuple("Events", "step site kind partner count")
 def _gap(g, q, tx, ty, bx, by, j, i, d0):
     """(x_ij, y_ij) of top site at local column j (global g) and bottom site local i (global q)."""
     return like(g - q, d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
+
+
+# --- The law's rules, one inlined function each, chosen by the law's codes -----------------------------
+
+@njit(cache=True, inline="always", _nrt=False)
+def _search_width(rebond, window):
+    """Substrate columns searched each side of a free site's nearest one: REBOND_FACING looks at that one
+    only, REBOND_NEAREST at ``window`` each side."""
+    return 0 if rebond == REBOND_FACING else window
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _rest_offset(reform, dx, zero):
+    """x0 of a bond that re-forms at x_ij = dx: 0 (REFORM_ZERO) or dx (REFORM_CURRENT)."""
+    return zero if reform == REFORM_ZERO else dx
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _partner(bonds, j):
+    """The substrate column site j is bonded to (-1: broken), from its float row."""
+    return np.int64(bonds[PARTNER, j])
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -104,16 +129,15 @@ def update(n, tx, ty, bx, by, it):
     window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
     """
     g, p = it.geom, it.consts
-    partner, x0, taken, claim, counters, reach = it.partner, it.x0, it.taken, it.claim, it.counters, it.reach
+    bonds, taken, claim, counters, reach = it.bonds, it.taken, it.claim, it.counters, it.reach
     ext_x, ext_y, exb_x, exb_y = it.ext_x, it.ext_y, it.exb_x, it.exb_y
     tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
     bbase, blo, bhi, bcols, w = g.bbase, g.blo, g.bhi, g.bcols, g.window
     bown0, bown1 = g.bown0, g.bown1
     ev, site0 = it.events, tbase - g.tfirst            # global site = local column + site0
     d0, db, kx, ky = p.delta0, p.delta_b, p.kx, p.ky
-    db2, d02 = db * db, p.rebond * p.rebond
-    if p.facing:
-        w = 0
+    db2, d02 = db * db, p.rebond_length * p.rebond_length
+    w = _search_width(p.rebond, w)
     zero = like(0, d0)
     for i in range(blo, bhi):
         taken[i] = 0
@@ -124,7 +148,7 @@ def update(n, tx, ty, bx, by, it):
     #    positions do not change within the step).  Free sites are listed in ``claim``.
     nfree = 0
     for j in range(tlo, thi):
-        q = partner[j]
+        q = _partner(bonds, j)
         top_own = town0 <= j < town1
         if top_own:
             ext_x[j] = zero
@@ -138,9 +162,9 @@ def update(n, tx, ty, bx, by, it):
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
             if dx * dx + dy * dy < db2:
                 taken[i] = 1
-                _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
+                _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
                 continue
-            partner[j] = -1
+            bonds[PARTNER, j] = -1
             if top_own:
                 counters[BREAKS] += 1
                 _event(ev, n, j + site0, BREAK, q)
@@ -170,7 +194,6 @@ def update(n, tx, ty, bx, by, it):
                 got = i
         claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j        # site and claim in one integer
     # 3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once.
-    zero_x0 = p.reform_zero
     for m in range(nfree):
         c = claim[m]
         if c < 0:
@@ -179,22 +202,22 @@ def update(n, tx, ty, bx, by, it):
         if taken[i]:
             continue
         taken[i] = 1
-        partner[j] = i + bbase
+        bonds[PARTNER, j] = i + bbase
         dx, dy = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)
-        x0[j] = zero if zero_x0 else dx
+        bonds[X0, j] = _rest_offset(p.reform, dx, zero)
         top_own = town0 <= j < town1
-        _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
+        _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
         if top_own:
             counters[FORMS] += 1
             _event(ev, n, j + site0, FORM, i + bbase)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _apply(j, i, dx, dy, x0, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y):
+def _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y):
     """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends."""
     bot_own = bown0 <= i < bown1
     if top_own or bot_own:
-        fx = -kx * (dx - x0[j])
+        fx = -kx * (dx - bonds[X0, j])
         fy = -ky * (dy - d0)
         if top_own:
             ext_x[j] = fx
@@ -246,13 +269,13 @@ def record(tx, ty, bx, by, it, k, fr):
     intact, partner, u/l, the traction sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho c_r^2),
     syy = k_y (y_ij - delta0)/(a rho c_r^2), and the bond's x-force on the block f_x = -k_x (x_ij - x0)
     (m c^2/a; 0 where broken), which the writer sums over the sites into the friction force."""
-    g, p, partner, x0 = it.geom, it.consts, it.partner, it.x0
+    g, p, bonds = it.geom, it.consts, it.bonds
     tbase, town0, town1 = g.tbase, g.town0, g.town1
     bbase, blo, bhi = g.bbase, g.blo, g.bhi
     d0, kx, ky, inv_l, tr = p.delta0, p.kx, p.ky, p.inv_l, p.traction
     for m in range(town1 - town0):
         j = town0 + m
-        q = partner[j]
+        q = _partner(bonds, j)
         fr.partner[k, m] = q
         fr.intact[k, m] = 1 if q >= 0 else 0
         fr.ux[k, m] = tx[j] * inv_l
@@ -260,7 +283,7 @@ def record(tx, ty, bx, by, it, k, fr):
         i = q - bbase
         if q >= 0 and blo <= i < bhi:
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-            sx = kx * (dx - x0[j])
+            sx = kx * (dx - bonds[X0, j])
             fr.sxy[k, m] = sx * tr
             fr.syy[k, m] = ky * (dy - d0) * tr
             fr.fx[k, m] = -sx

@@ -41,9 +41,8 @@ class NumpyStep:
         self.dx0 = ref.ref_x[self.top][:, None] - ref.ref_x[self.bot][None, :]
         self.partner = np.arange(len(self.top)) + setup.lattice.top.col0
         self.x0 = np.zeros(len(self.top))
-        sc = setup.scene
-        self.d0, self.db, self.kx, self.ky = (sc["interface.delta0"], sc["interface.delta_b"], sc["interface.kx"],
-                                             sc["interface.ky"])
+        sc, law = setup.scene, setup.law
+        self.d0, self.db, self.kx, self.ky = law.delta0, law.delta_b, law.kx, law.ky
         c = 0.5 * sc["time.zeta"] * setup.dt
         self.keep, self.inv, self.dt2 = 1 - c, 1 / (1 + c), setup.dt ** 2
 

@@ -1,0 +1,87 @@
+"""The interface law: what an adhesive bond is, built once from the scene; everything else asks it.
+
+A bond joins a top interface site (the block's bottom row) to a bottom site
+(the substrate's top row).  With x_ij, y_ij the bond's components (top minus
+bottom, in a) and x0 its rest offset:
+
+    force on the top node:  f_x = -k_x (x_ij - x0),   f_y = -k_y (y_ij - delta0)      (m c^2/a)
+    breaks when             sqrt(x_ij^2 + y_ij^2) >= delta_b                          (a)
+    a free site re-bonds    to a free bottom site within ``rebond_length`` (a)
+
+The rules a scene can choose are codes, each written once as an inlined
+function in ``engine.kernels.interface``:
+
+    reform   REFORM_ZERO: a re-formed bond starts with x0 = 0 (as the initial bonds);
+             REFORM_CURRENT: with x0 = x_ij (unstressed in x)
+    rebond   REBOND_NEAREST: the nearest free bottom site within reach; REBOND_FACING: only the one
+             facing the site (its nearest column)
+
+The per-site bond state is one table of named rows (``BOND_ROWS``) that the
+loop, the halo exchange and the checkpoint share: the exchange sends the
+first ``N_TRAVEL`` rows of every HALO site each step, and a checkpoint
+writes every row by name.  A new field of state is one more row.
+
+Units: lengths in a, stiffnesses in m c^2/a^2.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+REFORM_ZERO, REFORM_CURRENT = 0, 1
+REBOND_NEAREST, REBOND_FACING = 0, 1
+REFORM_CODES = {"zero": REFORM_ZERO, "current": REFORM_CURRENT}
+REBOND_CODES = {"nearest": REBOND_NEAREST, "facing": REBOND_FACING}
+
+# The per-site bond state, one row each, in the state's float type (integers are exact below 2^24 even in
+# float32): partner, the substrate column bonded to (-1 broken); x0, the bond's rest offset (a).  Rows
+# [0, N_TRAVEL) travel with the halo exchange.
+BOND_ROWS = ("partner", "x0")
+PARTNER, X0 = range(2)
+N_TRAVEL = 2
+# How a checkpoint stores each row: partner as int64, the others in the state's float type (None).
+ROW_DTYPES = {"partner": "int64", "x0": None}
+
+
+@dataclass(frozen=True)
+class InterfaceLaw:
+    """The adhesive bonds of one scene (see the module docstring); lengths in a, stiffnesses in m c^2/a^2."""
+    delta0: float                # unloaded gap; the rest length of y_ij
+    delta_b: float               # breaking length
+    kx: float                    # shear stiffness
+    ky: float                    # normal stiffness
+    reform: int                  # REFORM_* code
+    rebond: int                  # REBOND_* code
+    rebond_length: float         # largest length at which a free site re-bonds (delta0 unless set)
+
+    @classmethod
+    def from_scene(cls, scene: dict) -> "InterfaceLaw":
+        """The law of a resolved scene (every ``interface.*`` key present)."""
+        within = scene["interface.rebond_within"]
+        return cls(delta0=float(scene["interface.delta0"]), delta_b=float(scene["interface.delta_b"]),
+                   kx=float(scene["interface.kx"]), ky=float(scene["interface.ky"]),
+                   reform=REFORM_CODES[scene["interface.reform_x0"]], rebond=REBOND_CODES[scene["interface.rebond"]],
+                   rebond_length=float(within if within > 0 else scene["interface.delta0"]))
+
+    @property
+    def max_delta_b(self) -> float:
+        """The longest a bond gets before it breaks (a): what the halo's reach must cover."""
+        return self.delta_b
+
+    @property
+    def stiffness(self) -> tuple[float, float]:
+        """(k_x, k_y) that enter omega_max: the stiffest bond's."""
+        return self.kx, self.ky
+
+    def closing_load(self, sites: int) -> float:
+        """N k_y delta0 (m c^2/a): the total normal load that closes the mean gap of ``sites`` bonds at rest."""
+        return sites * self.ky * self.delta0
+
+    def unlike_reference(self) -> list[str]:
+        """The rules of this law that the reference implementation (``engine.reference``) does not have, as
+        "key = value" text; empty when it can run the law."""
+        out = []
+        if self.rebond != REBOND_NEAREST:
+            out.append("interface.rebond = 'facing'")
+        if self.rebond_length != self.delta0:
+            out.append(f"interface.rebond_within = {self.rebond_length!r}")
+        return out
