@@ -284,7 +284,7 @@ def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
     t0 = now_ns(clk) if timed else 0
     if prm.has_iface:
         br = prm.brow
-        ik.update(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], iface)
+        ik.update(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], nxt.tx[PAD], nxt.bx[br], iface)
         if iface.reach[0] >= 0:
             _flag(flags, FLAG_REACH, n, 1, 0, iface.reach[0], 0.0)
             iface.reach[0] = -1

@@ -241,7 +241,7 @@ class Simulation:
     def restore(self, arrays: dict, attrs: dict):
         """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
 
-        Every rank takes its OWNED part by global id, then one halo exchange fills the HALO copies."""
+        Every rank takes its OWNED part by global id, then halo exchanges fill the HALO copies."""
         s, st = self.state, self.setup
         self.n = n = int(attrs["step"])
         for level, name in ((n, "u"), (n - 1, "u_prev")):
@@ -254,10 +254,12 @@ class Simulation:
             sites = np.arange(sl.stop - sl.start) + s.site0()
             s.set_owned_bonds({name: arrays[name][sites] for name in BOND_ROWS})
         if self.comm is not None:
+            # Both levels: a rule may read u(n - 1) of HALO sites too (the slip velocity).
             from ..parallel.halo_mpi import mpi_complete, mpi_post
-            bx, by, tx, ty = s.level(n)
-            mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
-            mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
+            for level in (n - 1, n):
+                bx, by, tx, ty = s.level(level)
+                mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
+                mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
         self.events_written = int(attrs["events_written"])

@@ -15,7 +15,7 @@ import numpy as np
 from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
-from ..model.interface import BOND_ROWS, PARTNER, X0
+from ..model.interface import BOND_ROWS, KX, KY, PARTNER, X0
 from .kernels import interface as ik
 from .loop import Drive, Levels
 
@@ -89,6 +89,10 @@ class State:
         if lat.has_interface:
             lo, hi = tl.j(tl.stored[0])
             bonds[PARTNER, lo:hi] = np.arange(lo, hi) + tl.base    # each top site faces the bottom site of its column
+            # The sites' own constants, from their global index (the same field on every rank).
+            sites = np.arange(lo, hi) + tl.base - lat.top.col0
+            for name, values in law.site_values(lat.n_top_sites).items():
+                bonds[BOND_ROWS.index(name), lo:hi] = values[sites]
             br = bl.rows - 1
             blo, bhi = bl.j(bl.stored[br])
             bown0, bown1 = bl.j(bl.owned[br])
@@ -101,12 +105,10 @@ class State:
                                tcover=reach.top_cover, bcover=reach.bottom_cover)
         else:
             geom = ik.Geometry(*([0] * len(ik.Geometry._fields)))
-        consts = ik.Constants(delta0=dt.type(law.delta0), delta_b=dt.type(law.delta_b), kx=dt.type(law.kx),
-                              ky=dt.type(law.ky), reform=law.reform, rebond=law.rebond, drift=dt.type(reach.drift),
-                              inv_l=dt.type(1.0 / setup.l), traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)),
-                              rebond_length=dt.type(law.rebond_length))
+        consts = ik.Constants(drift=dt.type(reach.drift), inv_l=dt.type(1.0 / setup.l),
+                              traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)))
         geom = ik.Geometry(*(int(v) for v in geom))
-        self.iface = ik.Iface(bonds=bonds, claim=np.zeros(wt, np.int64),
+        self.iface = ik.Iface(bonds=bonds, rules=law.rules(dt), claim=np.zeros(wt, np.int64),
                               taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
                               exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
                               zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,
@@ -237,8 +239,8 @@ class State:
             dx = (j + g.tbase - p[bonded]) + (tx[PAD, j].astype(float) - bx[br, i])
             law = self.setup.law
             dy = law.delta0 + (ty[PAD, j].astype(float) - by[br, i])
-            total += float(np.sum(0.5 * law.kx * (dx - self.iface.bonds[X0, j]) ** 2 +
-                                  0.5 * law.ky * (dy - law.delta0) ** 2))
+            b = self.iface.bonds
+            total += float(np.sum(0.5 * b[KX, j] * (dx - b[X0, j]) ** 2 + 0.5 * b[KY, j] * (dy - law.delta0) ** 2))
             top_row = (self.own_block == TOP) & (self.own_row == lat.top.rows - 1)
             u = self.owned_u(n)
             total -= load * (-sc["load.FN"] / lat.top.cols) * float(u[top_row, 1].sum())

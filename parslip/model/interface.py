@@ -25,7 +25,10 @@ Units: lengths in a, stiffnesses in m c^2/a^2.
 """
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass
+
+import numpy as np
 
 REFORM_ZERO, REFORM_CURRENT = 0, 1
 REBOND_NEAREST, REBOND_FACING = 0, 1
@@ -33,13 +36,22 @@ REFORM_CODES = {"zero": REFORM_ZERO, "current": REFORM_CURRENT}
 REBOND_CODES = {"nearest": REBOND_NEAREST, "facing": REBOND_FACING}
 
 # The per-site bond state, one row each, in the state's float type (integers are exact below 2^24 even in
-# float32): partner, the substrate column bonded to (-1 broken); x0, the bond's rest offset (a).  Rows
-# [0, N_TRAVEL) travel with the halo exchange.
-BOND_ROWS = ("partner", "x0")
-PARTNER, X0 = range(2)
+# float32).  Rows [0, N_TRAVEL) change as the run goes and travel with the halo exchange:
+#   partner  the substrate column bonded to (-1 broken)
+#   x0       the bond's rest offset (a)
+# The others are the site's own constants (``site_values``), which every rank computes for the sites it
+# stores from their global index, so they need not travel:
+#   kx, ky   the bond's stiffnesses (m c^2/a^2);  delta_b  its breaking length (a)
+BOND_ROWS = ("partner", "x0", "kx", "ky", "delta_b")
+PARTNER, X0, KX, KY, DELTA_B = range(5)
 N_TRAVEL = 2
+SITE_CONSTANTS = ("kx", "ky", "delta_b")
 # How a checkpoint stores each row: partner as int64, the others in the state's float type (None).
-ROW_DTYPES = {"partner": "int64", "x0": None}
+ROW_DTYPES = {"partner": "int64", "x0": None, "kx": None, "ky": None, "delta_b": None}
+
+# What the compiled update reads of the law besides the per-site rows, in the state's float type:
+#   delta0 (a), rebond_length (a), reform and rebond: the rules' codes.
+Rules = namedtuple("Rules", "delta0 rebond_length reform rebond")
 
 
 @dataclass(frozen=True)
@@ -61,6 +73,18 @@ class InterfaceLaw:
                    kx=float(scene["interface.kx"]), ky=float(scene["interface.ky"]),
                    reform=REFORM_CODES[scene["interface.reform_x0"]], rebond=REBOND_CODES[scene["interface.rebond"]],
                    rebond_length=float(within if within > 0 else scene["interface.delta0"]))
+
+    def rules(self, dtype) -> Rules:
+        """The scalars the compiled update reads, lengths in the float type ``dtype``."""
+        f = np.dtype(dtype).type
+        return Rules(delta0=f(self.delta0), rebond_length=f(self.rebond_length), reform=self.reform,
+                     rebond=self.rebond)
+
+    def site_values(self, n_sites: int) -> dict:
+        """Each site's own constants {"kx", "ky", "delta_b"}: arrays over the global sites 0..n_sites-1 (the
+        same on every rank)."""
+        return {"kx": np.full(n_sites, self.kx), "ky": np.full(n_sites, self.ky),
+                "delta_b": np.full(n_sites, self.delta_b)}
 
     @property
     def max_delta_b(self) -> float:

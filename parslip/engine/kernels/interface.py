@@ -34,7 +34,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ...model.interface import PARTNER, REBOND_FACING, REFORM_ZERO, X0
+from ...model.interface import DELTA_B, KX, KY, PARTNER, REBOND_FACING, REFORM_ZERO, X0
 from .floats import like
 
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
@@ -54,18 +54,18 @@ BREAK, FORM = 1, 2
 #   tcover, bcover   reach (a) the halo must cover beyond this rank's interest (``layout.Reach``)
 Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow window tfirst tlast "
                                   "bcols rigid tcover bcover")
-# The interface constants (``model.interface.InterfaceLaw``), in the state's float type, the rules as codes:
-#   delta0, delta_b (a); kx, ky (m c^2/a^2); reform (REFORM_*), rebond (REBOND_*) the rules' codes;
-#   drift (a) a substrate site may move from its column; inv_l = 1/l; traction = 1/(a rho c_r^2);
-#   rebond_length (a) the largest length at which a free site re-bonds
-Constants = namedtuple("Constants", "delta0 delta_b kx ky reform rebond drift inv_l traction rebond_length")
+# Constants of the rank's interface record, in the state's float type: drift (a) a substrate site may move
+# from its column; inv_l = 1/l; traction = 1/(a rho c_r^2).
+Constants = namedtuple("Constants", "drift inv_l traction")
 # The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
 # the substrate's (bottom sites): bonds, the per-site bond state [row, site] with the rows of
-# ``model.interface.BOND_ROWS`` (partner: global substrate column, -1 broken; x0: rest offset); claim and
+# ``model.interface.BOND_ROWS`` (partner: global substrate column, -1 broken; x0: rest offset; the site's
+# own kx, ky, delta_b); rules, the law's scalars and rule codes (``model.interface.Rules``); claim and
 # taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom nodes; zeros a
 # row of zeros; counters [BREAKS, FORMS] of OWNED sites; reach[0] the first OWNED site out of the halo's
 # reach (-1 none).
-Iface = namedtuple("Iface", "bonds claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach events")
+Iface = namedtuple("Iface", "bonds rules claim taken ext_x ext_y exb_x exb_y zeros geom consts counters reach "
+                            "events")
 # The event record of one rank: every break and re-formation of an OWNED top site, in the order the loop
 # makes them (by step; within a step the breaks in site order, then the re-formations in site order):
 #   step     the step n whose update made it (absolute, from the start of the ramp)
@@ -116,10 +116,11 @@ def _event(ev, n, site, kind, q):
 
 
 @njit(cache=True, _nrt=False)
-def update(n, tx, ty, bx, by, it):
+def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
     """Steps 1-3 above on every local top site at step ``n``, then the bond forces at u(t).
 
-    tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row.  ``partner`` holds global
+    tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row; tx_prev, bx_prev: their x at
+    u(t - dt), for rules that read the slip velocity.  ``partner`` holds global
     bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
     (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
     there is no bond.  ``claim`` is scratch: the free sites, then their claims.  Every break and
@@ -128,15 +129,15 @@ def update(n, tx, ty, bx, by, it):
     ``reach[0]`` becomes the global column of the first OWNED top site whose bond or re-bonding
     window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
     """
-    g, p = it.geom, it.consts
+    g, p = it.geom, it.rules
     bonds, taken, claim, counters, reach = it.bonds, it.taken, it.claim, it.counters, it.reach
     ext_x, ext_y, exb_x, exb_y = it.ext_x, it.ext_y, it.exb_x, it.exb_y
     tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
     bbase, blo, bhi, bcols, w = g.bbase, g.blo, g.bhi, g.bcols, g.window
     bown0, bown1 = g.bown0, g.bown1
     ev, site0 = it.events, tbase - g.tfirst            # global site = local column + site0
-    d0, db, kx, ky = p.delta0, p.delta_b, p.kx, p.ky
-    db2, d02 = db * db, p.rebond_length * p.rebond_length
+    d0 = p.delta0
+    d02 = p.rebond_length * p.rebond_length
     w = _search_width(p.rebond, w)
     zero = like(0, d0)
     for i in range(blo, bhi):
@@ -160,9 +161,10 @@ def update(n, tx, ty, bx, by, it):
                     reach[0] = j + tbase
                 continue
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-            if dx * dx + dy * dy < db2:
+            db = bonds[DELTA_B, j]
+            if dx * dx + dy * dy < db * db:
                 taken[i] = 1
-                _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
+                _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y)
                 continue
             bonds[PARTNER, j] = -1
             if top_own:
@@ -206,19 +208,20 @@ def update(n, tx, ty, bx, by, it):
         dx, dy = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)
         bonds[X0, j] = _rest_offset(p.reform, dx, zero)
         top_own = town0 <= j < town1
-        _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y)
+        _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y)
         if top_own:
             counters[FORMS] += 1
             _event(ev, n, j + site0, FORM, i + bbase)
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, kx, ky, ext_x, ext_y, exb_x, exb_y):
-    """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends."""
+def _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y):
+    """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends (k_x, k_y the
+    top site's own)."""
     bot_own = bown0 <= i < bown1
     if top_own or bot_own:
-        fx = -kx * (dx - bonds[X0, j])
-        fy = -ky * (dy - d0)
+        fx = -bonds[KX, j] * (dx - bonds[X0, j])
+        fy = -bonds[KY, j] * (dy - d0)
         if top_own:
             ext_x[j] = fx
             ext_y[j] = fy
@@ -272,7 +275,7 @@ def record(tx, ty, bx, by, it, k, fr):
     g, p, bonds = it.geom, it.consts, it.bonds
     tbase, town0, town1 = g.tbase, g.town0, g.town1
     bbase, blo, bhi = g.bbase, g.blo, g.bhi
-    d0, kx, ky, inv_l, tr = p.delta0, p.kx, p.ky, p.inv_l, p.traction
+    d0, inv_l, tr = it.rules.delta0, p.inv_l, p.traction
     for m in range(town1 - town0):
         j = town0 + m
         q = _partner(bonds, j)
@@ -283,9 +286,9 @@ def record(tx, ty, bx, by, it, k, fr):
         i = q - bbase
         if q >= 0 and blo <= i < bhi:
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-            sx = kx * (dx - bonds[X0, j])
+            sx = bonds[KX, j] * (dx - bonds[X0, j])
             fr.sxy[k, m] = sx * tr
-            fr.syy[k, m] = ky * (dy - d0) * tr
+            fr.syy[k, m] = bonds[KY, j] * (dy - d0) * tr
             fr.fx[k, m] = -sx
         else:
             fr.sxy[k, m] = 0.0
