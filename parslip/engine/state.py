@@ -108,7 +108,7 @@ class State:
         consts = ik.Constants(drift=dt.type(reach.drift), inv_l=dt.type(1.0 / setup.l),
                               traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)))
         geom = ik.Geometry(*(int(v) for v in geom))
-        self.iface = ik.Iface(bonds=bonds, rules=law.rules(dt), claim=np.zeros(wt, np.int64),
+        self.iface = ik.Iface(bonds=bonds, rules=law.rules(dt, setup), claim=np.zeros(wt, np.int64),
                               taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),
                               exb_x=np.zeros(max(wb, 1), dt), exb_y=np.zeros(max(wb, 1), dt),
                               zeros=np.zeros(max(wt, wb, 1), dt), geom=geom, consts=consts,

@@ -85,6 +85,12 @@ SCHEMA: dict[str, Key] = {
                             "interface.rebond_within, or only the one facing it (the nearest column)"),
     "interface.rebond_within": Key(0.0, float, "a", ">= 0 (0 = auto: delta0, the paper's delta_new <= delta0)",
                                    _range(0.0), "largest bond length at which a free top node re-bonds"),
+    "interface.heal_speed": Key(0.0, float, "c_r", ">= 0 (0 = no condition, the paper)", _range(0.0),
+                                "a free site re-bonds only while its x-velocity relative to the substrate site it "
+                                "claims is below this (rate-dependent re-adhesion)"),
+    "interface.heal_time": Key(0.0, float, "l/c_r", ">= 0 (0 = at once, the paper)", _range(0.0),
+                               "a free site re-bonds only after claiming the same substrate site (the nearest "
+                               "free one within reach) for this long; the clock restarts when the claim changes"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
                                 "largest interface slip the MPI halo must reach across"),
     # load and drive -------------------------------------------------------------

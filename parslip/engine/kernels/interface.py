@@ -34,7 +34,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ...model.interface import DELTA_B, KX, KY, PARTNER, REBOND_FACING, REFORM_ZERO, X0
+from ...model.interface import (CAND, CLOCK, DELTA_B, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER, REBOND_FACING,
+                                REFORM_ZERO, X0)
 from .floats import like
 
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
@@ -96,6 +97,25 @@ def _search_width(rebond, window):
 def _rest_offset(reform, dx, zero):
     """x0 of a bond that re-forms at x_ij = dx: 0 (REFORM_ZERO) or dx (REFORM_CURRENT)."""
     return zero if reform == REFORM_ZERO else dx
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _heals(rules, bonds, j, q, dvx):
+    """Whether free site j may take its claim q (a substrate column; -1: none) this step, by the healing
+    rule's bits: HEAL_SPEED while its x-displacement relative to q over the last step, ``dvx``, is below
+    heal_speed dt; HEAL_TIME once q has been its claim for more than n_heal consecutive steps (the clock
+    restarts whenever the claim changes or lapses)."""
+    ok = True
+    if rules.heal & HEAL_SPEED:
+        ok = q >= 0 and abs(dvx) < rules.heal_du
+    if rules.heal & HEAL_TIME:
+        c = 0
+        if q >= 0:
+            c = bonds[CLOCK, j] + 1 if bonds[CLOCK, j] > 0 and np.int64(bonds[CAND, j]) == q else 1
+        bonds[CAND, j] = q
+        bonds[CLOCK, j] = min(c, rules.n_heal + 1)
+        ok = ok and c > rules.n_heal
+    return ok
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -194,6 +214,9 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
             if d2 <= d02 and d2 < best:
                 best = d2
                 got = i
+        if p.heal and not _heals(p, bonds, j, got + bbase if got >= 0 else -1,
+                                 (tx[j] - tx_prev[j]) - (bx[got] - bx_prev[got]) if got >= 0 else zero):
+            got = -1
         claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j        # site and claim in one integer
     # 3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once.
     for m in range(nfree):
@@ -207,6 +230,7 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
         bonds[PARTNER, j] = i + bbase
         dx, dy = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)
         bonds[X0, j] = _rest_offset(p.reform, dx, zero)
+        bonds[CLOCK, j] = 0
         top_own = town0 <= j < town1
         _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y)
         if top_own:
