@@ -72,6 +72,18 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
                                       f"{law.delta_b:g} a; F_N = {s['load.FN']:g} (the gap closes at N k_y delta0 = "
                                       f"{law.closing_load(top.cols):.6g}): mean gap at rest "
                                       f"{law.delta0 - s['load.FN'] / (top.cols * law.ky):.4g} a"))
+        if not law.uniform:
+            vals = law.site_values(lat.n_top_sites)
+            out.append(_line("sites", "; ".join(
+                f"{k} {v.min():.4g} to {v.max():.4g} (mean {v.mean():.4g}, cv {v.std() / v.mean():.3g})"
+                if v.max() > v.min() else f"{k} {v[0]:.4g}" for k, v in vals.items()) + f" over {lat.n_top_sites} sites"
+                + (f"; {len(law.patches)} patch(es)" if law.patches else "")
+                + (f"; random {law.random[0]}: cv {law.random[1]:g}, correlation {law.random[2]:g} a, seed "
+                   f"{law.random[3]}" if law.random else "")))
+        if law.heal:
+            out.append(_line("healing", f"re-bond only below a relative slip velocity of {law.heal_speed:g} c_r"
+                             * bool(law.heal_speed) + ("; " if law.heal_speed and law.heal_time else "")
+                             + f"after claiming the same site for {law.heal_time:g} l/c_r" * bool(law.heal_time)))
     out += [
         _line("wave speeds", f"c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})"),
         _line("Rayleigh speed", f"c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)"),

@@ -20,6 +20,8 @@ The writer (``io.output``) creates exactly these datasets and the readers
                                                applied in the step that ended at the frame (m c^2/a)
   /interface/mu              float64 [frames]  -F_T / F_N, the friction coefficient the interface mobilises
   /interface/step            int64   [frames]  the drive step of the frame (steps of dt; 0 = the drive's start)
+  /interface/kx, ky          float64 [sites]   each site's bond stiffnesses as the run used them (m c^2/a^2)
+  /interface/delta_b         float64 [sites]   each site's breaking length as the run used it (a)
   /interface/events/         every bond break and re-formation of the run, in all phases (ramp, settle,
                              drive), exact to the time step; 1-D datasets of one length, sorted by step, then
                              site, then kind (a break before a re-formation of the same site in one step):
@@ -61,6 +63,11 @@ INTERFACE_DATASETS = {
     "mu": (np.float64, False, "-friction_force / F_N"),
 }
 INTERFACE_DATASETS["step"] = (np.int64, False, "drive steps (dt), 0 = the start of the drive")
+INTERFACE_DATASETS["kx"] = (np.float64, False, "m c^2/a^2 (each site's bond, as the run used it)")
+INTERFACE_DATASETS["ky"] = (np.float64, False, "m c^2/a^2 (each site's bond, as the run used it)")
+INTERFACE_DATASETS["delta_b"] = (np.float64, False, "a (each site's breaking length, as the run used it)")
+# One value per site.
+SITE_DATASETS = ("x", "kx", "ky", "delta_b")
 FRAME_FIELDS = ("intact", "partner", "ux", "uy", "sxy", "syy")
 # One value per frame, like ``time``.
 FORCE_DATASETS = ("friction_force", "drive_force", "mu")

@@ -301,6 +301,8 @@ class Output:
             self._handles[f"interface/{name}"] = ds
         if self.root:
             g["x"][...] = (np.arange(ns) + 0.5) / ns    # node s stands at the middle of its spacing
+            for name, values in st.law.site_values(ns).items():
+                g[name][...] = values
         ev = self._handles[f"interface/{EVENTS}"] = g.create_group(EVENTS)
         ev.attrs["events_written"] = 0
         ev.attrs["site_column0"] = int(st.lattice.top.col0)

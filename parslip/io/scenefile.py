@@ -47,6 +47,9 @@ def to_toml(scene: dict[str, Any]) -> str:
     """A flat scene as nested TOML text (stored in every output file and checkpoint)."""
     tree: dict[str, dict] = {}
     for name, value in scene.items():
-        sec, key = name.split(".", 1)
-        tree.setdefault(sec, {})[key] = value
+        *path, key = name.split(".")
+        node = tree
+        for part in path:
+            node = node.setdefault(part, {})
+        node[key] = value
     return tomli_w.dumps(tree)

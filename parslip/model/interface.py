@@ -27,6 +27,26 @@ loop, the halo exchange and the checkpoint share: the exchange sends the
 first ``N_TRAVEL`` rows of every HALO site each step, and a checkpoint
 writes every row by name.  A new field of state is one more row.
 
+Each site may have its own k_x, k_y and delta_b (delta0 stays uniform):
+``site_values`` starts from the scene's values, applies the seeded random
+field (``interface.random.*``), then the patches (``interface.patch``, later
+ones over earlier ones).  Site s stands at x = (s + 1/2)/N in l and belongs to
+a patch x = [from, to) when from <= x < to.  The random field is lognormal
+and so keeps its values positive (k_x, k_y) or above delta0 (delta_b, whose
+excess over delta0 is the lognormal part):
+
+    g      white noise from numpy's PCG64(seed), one value per site of the whole contact (the same
+           on every rank), smoothed by a Gaussian of standard deviation correlation/sqrt(2) sites, so
+           that its correlation is exp(-r^2 / (2 correlation^2)) (r, correlation in a); then
+           standardised over the contact to mean 0 and standard deviation 1 exactly
+    L      exp(s g - s^2/2) with s^2 = ln(1 + cv'^2): mean about 1, coefficient of variation about cv'
+    value  k L with cv' = cv for kx, ky; delta0 + (delta_b - delta0) L with cv' = cv delta_b/(delta_b -
+           delta0) for delta_b, so that delta_b's own coefficient of variation is about cv
+
+The field is not rescaled afterwards: its mean and cv over a contact are the
+sample's (within a few per cent of the targets for 100 sites and a
+correlation of a few a).
+
 Units: lengths in a, stiffnesses in m c^2/a^2.
 """
 from __future__ import annotations
@@ -65,6 +85,61 @@ ROW_DTYPES = {"partner": "int64", "x0": None, "cand": "int64", "clock": "int64",
 Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal")
 
 
+PATCH_KEYS = ("kx", "ky", "delta_b")
+RANDOM_KEYS = ("kx", "ky", "delta_b")
+
+
+def check_patches(patches, delta0: float) -> None:
+    """Refuse, with one line naming the reason, a patch list a scene cannot mean (ConfigError)."""
+    from ..errors import ConfigError
+    if not isinstance(patches, list):
+        raise ConfigError(f"interface.patch = {patches!r}: accepted: an array of tables [[interface.patch]], each "
+                          f"with x = [from, to] in l and any of {', '.join(PATCH_KEYS)}")
+    for i, p in enumerate(patches):
+        where = f"interface.patch[{i}]"
+        if not isinstance(p, dict):
+            raise ConfigError(f"{where} = {p!r}: accepted: a table with x = [from, to] and any of "
+                              f"{', '.join(PATCH_KEYS)}")
+        extra = sorted(set(p) - {"x", *PATCH_KEYS})
+        if extra:
+            raise ConfigError(f"{where}.{extra[0]} = {p[extra[0]]!r}: a patch sets only {', '.join(PATCH_KEYS)} "
+                              f"(delta0 stays uniform); accepted keys: x, {', '.join(PATCH_KEYS)}")
+        x = p.get("x")
+        if not (isinstance(x, list) and len(x) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                            for v in x)):
+            raise ConfigError(f"{where}.x = {x!r}: accepted: [from, to] in l, 0 <= from < to <= 1")
+        if not 0.0 <= x[0] < x[1] <= 1.0:
+            why = "reversed or empty" if x[0] >= x[1] else "outside the contact [0, 1]"
+            raise ConfigError(f"{where}.x = {x!r}: {why}; accepted: [from, to] in l, 0 <= from < to <= 1")
+        for key, ok, acc in (("kx", lambda v: v >= 0, ">= 0"), ("ky", lambda v: v > 0, "> 0"),
+                             ("delta_b", lambda v: v > delta0, f"> delta0 = {delta0!r}")):
+            if key in p:
+                v = p[key]
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(v) or v != v:
+                    why = "at or below delta0" if key == "delta_b" and isinstance(v, (int, float)) else "out of range"
+                    raise ConfigError(f"{where}.{key} = {v!r}: {why}; accepted: {acc}")
+
+
+def random_field(n: int, cv: float, correlation: float, seed: int) -> np.ndarray:
+    """The lognormal factor L of the module docstring over n sites: mean about 1, coefficient of variation
+    about ``cv``, correlation length ``correlation`` (a); the same for a seed on every rank."""
+    if cv == 0 or n == 0:
+        return np.ones(n)
+    rng = np.random.Generator(np.random.PCG64(seed))
+    s = correlation / np.sqrt(2.0)                       # kernel width, sites
+    pad = int(np.ceil(4 * s))
+    w = rng.standard_normal(n + 2 * pad)
+    if s > 0:
+        k = np.arange(-pad, pad + 1)
+        kernel = np.exp(-0.5 * (k / s) ** 2)
+        w = np.convolve(w, kernel / kernel.sum(), mode="valid")
+    else:
+        w = w[pad:pad + n]
+    g = (w - w.mean()) / w.std() if n > 1 and w.std() > 0 else np.zeros(n)
+    s2 = np.log1p(cv * cv)
+    return np.exp(np.sqrt(s2) * g - 0.5 * s2)
+
+
 @dataclass(frozen=True)
 class InterfaceLaw:
     """The adhesive bonds of one scene (see the module docstring); lengths in a, stiffnesses in m c^2/a^2."""
@@ -77,6 +152,8 @@ class InterfaceLaw:
     rebond_length: float         # largest length at which a free site re-bonds (delta0 unless set)
     heal_speed: float = 0.0      # c_r: re-bond only below this relative slip velocity (0: no condition)
     heal_time: float = 0.0       # l/c_r: re-bond only after claiming the same site this long (0: at once)
+    patches: tuple = ()          # ((from, to), {"kx"|"ky"|"delta_b": value}) in order
+    random: tuple = ()           # (key, cv, correlation in a, seed), or () for none
 
     @classmethod
     def from_scene(cls, scene: dict) -> "InterfaceLaw":
@@ -86,7 +163,17 @@ class InterfaceLaw:
                    kx=float(scene["interface.kx"]), ky=float(scene["interface.ky"]),
                    reform=REFORM_CODES[scene["interface.reform_x0"]], rebond=REBOND_CODES[scene["interface.rebond"]],
                    rebond_length=float(within if within > 0 else scene["interface.delta0"]),
-                   heal_speed=float(scene["interface.heal_speed"]), heal_time=float(scene["interface.heal_time"]))
+                   heal_speed=float(scene["interface.heal_speed"]), heal_time=float(scene["interface.heal_time"]),
+                   patches=tuple((tuple(float(v) for v in p["x"]), tuple((k, float(p[k])) for k in PATCH_KEYS if k in p))
+                                 for p in scene["interface.patch"]),
+                   random=((scene["interface.random.key"], float(scene["interface.random.cv"]),
+                            float(scene["interface.random.correlation"]), int(scene["interface.random.seed"]))
+                           if scene["interface.random.cv"] > 0 else ()))
+
+    @property
+    def uniform(self) -> bool:
+        """Every site has the scene's kx, ky and delta_b."""
+        return not self.patches and not self.random
 
     @property
     def heal(self) -> int:
@@ -103,20 +190,35 @@ class InterfaceLaw:
                      n_heal=int(math.ceil(self.heal_time * setup.t_unit / setup.dt - 1e-9)))
 
     def site_values(self, n_sites: int) -> dict:
-        """Each site's own constants {"kx", "ky", "delta_b"}: arrays over the global sites 0..n_sites-1 (the
-        same on every rank)."""
-        return {"kx": np.full(n_sites, self.kx), "ky": np.full(n_sites, self.ky),
-                "delta_b": np.full(n_sites, self.delta_b)}
+        """Each site's own constants {"kx", "ky", "delta_b"}: arrays over the global sites 0..n_sites-1, the
+        same on every rank (the module docstring says how they are made)."""
+        out = {"kx": np.full(n_sites, self.kx), "ky": np.full(n_sites, self.ky),
+               "delta_b": np.full(n_sites, self.delta_b)}
+        if self.random:
+            key, cv, corr, seed = self.random
+            if key == "delta_b":
+                excess = self.delta_b - self.delta0
+                out[key] = self.delta0 + excess * random_field(n_sites, cv * self.delta_b / excess, corr, seed)
+            else:
+                out[key] = out[key] * random_field(n_sites, cv, corr, seed)
+        x = (np.arange(n_sites) + 0.5) / max(n_sites, 1)
+        for (lo, hi), values in self.patches:
+            inside = (x >= lo) & (x < hi)
+            for key, v in values:
+                out[key][inside] = v
+        return out
 
-    @property
-    def max_delta_b(self) -> float:
-        """The longest a bond gets before it breaks (a): what the halo's reach must cover."""
-        return self.delta_b
+    def extremes(self, n_sites: int) -> dict:
+        """{key: (min, max)} of the sites' kx, ky, delta_b."""
+        return {k: (float(v.min()), float(v.max())) for k, v in self.site_values(n_sites).items() if len(v)}
 
-    @property
-    def stiffness(self) -> tuple[float, float]:
-        """(k_x, k_y) that enter omega_max: the stiffest bond's."""
-        return self.kx, self.ky
+    def largest(self, n_sites: int) -> dict:
+        """{key: the largest value over the n_sites sites} of kx, ky and delta_b: the stiffest bonds enter
+        omega_max (a stiffer spring anywhere raises every eigenvalue of the stiffness or leaves it), the
+        longest delta_b the halo's reach."""
+        if self.uniform or n_sites == 0:
+            return {"kx": self.kx, "ky": self.ky, "delta_b": self.delta_b}
+        return {k: float(v.max()) for k, v in self.site_values(n_sites).items()}
 
     def closing_load(self, sites: int) -> float:
         """N k_y delta0 (m c^2/a): the total normal load that closes the mean gap of ``sites`` bonds at rest."""
@@ -132,4 +234,6 @@ class InterfaceLaw:
             out.append(f"interface.rebond_within = {self.rebond_length!r}")
         if self.heal:
             out.append("interface.heal_speed or interface.heal_time")
+        if not self.uniform:
+            out.append("interface.patch or interface.random")
         return out

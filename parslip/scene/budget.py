@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 
 from .memory import predict
-from ..io.contract import FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D
+from ..io.contract import FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS
 from ..model.lattice import BOTTOM, Lattice
 from .schema import SCHEMA
 
@@ -59,7 +59,7 @@ def output_bytes(st) -> dict:
     """Bytes of data in the run file: {'interface': ..., 'snapshots': ..., 'total': ...}.
 
     interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame for each
-    of time, step, friction_force, drive_force and mu + 8 per site (x); snapshots: each holds every node
+    of time, step, friction_force, drive_force and mu + 8 per site for each of x, kx, ky, delta_b; snapshots: each holds every node
     (72 B) and every bond as a line cell (27 B: bulk bonds and one per interface site) and a few offsets.
     The bond events add ``EVENT_FILE_BYTES`` per event on top: how many the run makes depends on its
     physics, so they are not in the total.
@@ -67,7 +67,7 @@ def output_bytes(st) -> dict:
     lat = st.lattice
     frames, sites = st.n_frames, lat.n_top_sites
     per_site = sum(INTERFACE_DATASETS[name][0]().itemsize for name in FRAME_FIELDS)
-    iface = frames * sites * per_site + frames * 8 * len(PER_FRAME_1D) + sites * 8
+    iface = frames * sites * per_site + frames * 8 * len(PER_FRAME_1D) + sites * 8 * len(SITE_DATASETS)
     cells = bulk_cells(lat) + sites
     snaps = st.n_snapshots * (lat.n_nodes * SNAPSHOT_NODE_BYTES + cells * SNAPSHOT_CELL_BYTES
                               + SNAPSHOT_FIXED_BYTES)

@@ -100,9 +100,10 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     law = InterfaceLaw.from_scene(scene)
+    big = law.largest(lat.n_top_sites if lat.has_interface else 0)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         *law.stiffness)
+                                         big["kx"], big["ky"])
     else:
         omega, method = omega
     limit = _dt_max(omega)
@@ -126,7 +127,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
-               slip_reach=reach, reach=interface_reach(law.rebond_length, law.max_delta_b, reach),
+               slip_reach=reach, reach=interface_reach(law.rebond_length, big["delta_b"], reach),
                precision=scene["time.precision"], law=law)
     limits.check_setup(st)
     return st

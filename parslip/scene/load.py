@@ -10,6 +10,7 @@ from typing import Any
 
 from ..errors import ConfigError
 from ..io import scenefile
+from ..model.interface import check_patches
 from ..model.physics import max_nu
 from . import limits
 from .schema import SCHEMA
@@ -49,7 +50,8 @@ def _typed(name: str, value: Any) -> Any:
     if key.kind is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if not isinstance(value, key.kind) or (key.kind is int and isinstance(value, bool)):
-        kind = {float: "a number", int: "an integer", str: "a string", bool: "true or false"}[key.kind]
+        kind = {float: "a number", int: "an integer", str: "a string", bool: "true or false",
+                list: "an array"}[key.kind]
         raise ConfigError(f"{name} = {value!r}: expected {kind}"
                           f"{'' if key.units == '-' else f' in {key.units}'}; accepted: {key.accepted}")
     return value
@@ -115,6 +117,7 @@ def _cross_checks(s: dict[str, Any]) -> None:
     if s["interface.delta_b"] <= s["interface.delta0"]:
         raise ConfigError(f"interface.delta_b = {s['interface.delta_b']!r}: must exceed interface.delta0 = "
                           f"{s['interface.delta0']!r}; accepted: delta_b > delta0 (in a)")
+    check_patches(s["interface.patch"], s["interface.delta0"])
     nu_hi = max_nu(s["material.model"])
     if s["material.nu"] > nu_hi:
         raise ConfigError(f"material.nu = {s['material.nu']!r}: gives k_t < 0 in {s['material.model']}; "

@@ -85,6 +85,21 @@ SCHEMA: dict[str, Key] = {
                             "interface.rebond_within, or only the one facing it (the nearest column)"),
     "interface.rebond_within": Key(0.0, float, "a", ">= 0 (0 = auto: delta0, the paper's delta_new <= delta0)",
                                    _range(0.0), "largest bond length at which a free top node re-bonds"),
+    "interface.patch": Key([], list, "-", "an array of tables [[interface.patch]], each with x = [from, to] in l "
+                           "(0 <= from < to <= 1) and any of kx, ky (>= 0, > 0), delta_b (> delta0)",
+                           lambda v: isinstance(v, list),
+                           "stretches of the contact with their own bond properties: a site at x (l, from the "
+                           "rear edge) with from <= x < to takes the patch's values; later patches override "
+                           "earlier ones and the random field"),
+    "interface.random.key": Key("delta_b", str, "-", "'kx', 'ky' or 'delta_b'", _choice("kx", "ky", "delta_b"),
+                                "the bond property the seeded random field varies"),
+    "interface.random.cv": Key(0.0, float, "-", ">= 0 (0 = no random field)", _range(0.0),
+                               "coefficient of variation of the random field (lognormal: k_x, k_y stay positive, "
+                               "delta_b above delta0)"),
+    "interface.random.correlation": Key(0.0, float, "a", ">= 0 (0 = uncorrelated sites)", _range(0.0),
+                                        "correlation length of the random field along the contact"),
+    "interface.random.seed": Key(0, int, "-", ">= 0", _range(0),
+                                 "seed of the random field (numpy PCG64): the same field on any rank count"),
     "interface.heal_speed": Key(0.0, float, "c_r", ">= 0 (0 = no condition, the paper)", _range(0.0),
                                 "a free site re-bonds only while its x-velocity relative to the substrate site it "
                                 "claims is below this (rate-dependent re-adhesion)"),
