@@ -163,3 +163,80 @@ def test_the_reference_engine_refuses_laws_it_does_not_have():
         with pytest.raises(NotImplementedError, match="interface"):
             Reference(derive(scene(**SMALL, **sets)))
     assert InterfaceLaw.from_scene(scene()).unlike_reference() == []
+
+
+# ------------------------------------------------------------------------ loading through springs, rows --
+
+def _first_break(tmp_path, name, **sets):
+    import tempfile  # noqa: F401
+    base = {**SMALL, "output.snapshots": 0, "drive.duration": 8.0, **sets}
+    out = tmp_path / f"{name}.vtkhdf"
+    parslip.run(base, out=str(out), progress=False)
+    return parslip.open(str(out))
+
+
+def test_a_stiff_loader_is_the_prescribed_drive_and_a_soft_one_breaks_later(tmp_path):
+    """drive.spring = 100 (far stiffer than the block's k_n = 2.8) breaks first within 2 % of the prescribed
+    drive; 0.05 breaks later; the drive force is the springs' force, and the loader moves at v0."""
+    ref = _first_break(tmp_path, "ref")
+    stiff = _first_break(tmp_path, "stiff", **{"drive.spring": 100.0})
+    soft = _first_break(tmp_path, "soft", **{"drive.spring": 0.05})
+    t0 = ref.first_break[0]
+    assert abs(stiff.first_break[0] / t0 - 1) < 0.02
+    assert soft.first_break[0] is None or soft.first_break[0] > 1.1 * t0
+    it = stiff.interface
+    np.testing.assert_allclose(it["loader"], it["time"] * stiff.v0, rtol=1e-9, atol=1e-15)
+    # The springs carry the load the prescribed face took (on average: a stiff spring rings at sqrt(k_s)).
+    assert it["drive_force"].mean() == pytest.approx(ref.interface["drive_force"].mean(), rel=0.05)
+
+
+def test_driven_rows_change_where_the_block_is_pushed(tmp_path):
+    """drive.rows = [0, 1]: only the two lowest rows of the rear face are pushed; the first break moves."""
+    ref = _first_break(tmp_path, "ref")
+    low = _first_break(tmp_path, "low", **{"drive.rows": [0, 1]})
+    assert low.first_break[0] != ref.first_break[0]
+    assert low.first_break[0] is not None
+
+
+def test_a_spring_stiffer_than_the_lattice_sets_the_time_step_and_stays_stable(tmp_path):
+    """A loader spring of 1e4 on a rigid substrate: omega_max grows to at least sqrt(k_s), dt follows, and the
+    run stays finite (the extreme case the stability limit must cover)."""
+    st = derive(scene(**SMALL, **{"lattice.substrate": "rigid", "drive.spring": 1e4}))
+    assert st.omega_max >= 100.0 and st.dt < 2 / 100.0
+    run = _first_break(tmp_path, "extreme", **{"lattice.substrate": "rigid", "drive.spring": 1e4,
+                                                "drive.duration": 2.0})
+    assert np.isfinite(run.interface["ux"]).all() and run.status == "complete"
+
+
+def test_springs_and_rows_are_rank_invariant_across_a_restart(tmp_path):
+    """A soft loader on the two lowest rows: 3 l/c_r on 3 ranks continued to 6 on 2 equals 6 at once on one."""
+    require("gather")
+    sets = {"drive.spring": 0.5, "drive.rows": [0, 1], "checkpoint.every": 1.0, "output.snapshots": 0}
+    sc = tmp_path / "s.toml"
+    sc.write_text(small_toml(**sets))
+    ref, out = tmp_path / "ref.vtkhdf", tmp_path / "o.vtkhdf"
+    assert run_cli(1, "run", sc, "--out", ref, "--no-png", "--quiet").returncode == 0
+    p = run_cli(3, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=3.0", timeout=150)
+    assert p.returncode == 0, p.stderr
+    p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", str(out) + ".ckpt.h5")
+    assert p.returncode == 0, p.stderr
+    a, b = _interface(ref), _interface(out)
+    for name in a:
+        assert a[name].tobytes() == b[name].tobytes(), name
+
+
+@pytest.mark.parametrize("settings,message", [
+    (("drive.mode=shear", "drive.rows=[0,1]"), "drive.rows = [0, 1]: only a push or a pull"),
+    (("drive.rows=[2,9]",), "drive.rows = [2, 9]: out of range"),
+    (("drive.rows=[1,0]",), "drive.rows = [1, 0]: out of range"),
+    (("drive.spring=-1",), "drive.spring = -1.0: out of range"),
+])
+def test_bad_drives_get_one_line_and_exit_2(tmp_path, capsys, settings, message):
+    sc = tmp_path / "s.toml"
+    sc.write_text(small_toml())
+    argv = ["run", str(sc), "--out", str(tmp_path / "o.vtkhdf")]
+    for s in settings:
+        argv += ["--set", s]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err

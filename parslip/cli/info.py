@@ -49,6 +49,8 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
     n = lat.n_nodes
     fixed = n - budget.integrated_nodes(lat)
     driven = {"push": top.rows, "pull": top.rows, "shear": top.cols}.get(s["drive.mode"], 0)
+    if s["drive.rows"]:
+        driven = s["drive.rows"][1] - s["drive.rows"][0] + 1
     if lat.rigid:
         sub = f"substrate rigid: one row of {bot.cols} fixed interface sites, no nodes"
     elif lat.has_interface:
@@ -84,6 +86,11 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
             out.append(_line("healing", f"re-bond only below a relative slip velocity of {law.heal_speed:g} c_r"
                              * bool(law.heal_speed) + ("; " if law.heal_speed and law.heal_time else "")
                              + f"after claiming the same site for {law.heal_time:g} l/c_r" * bool(law.heal_time)))
+    if s["drive.mode"] != "none" and (s["drive.spring"] > 0 or s["drive.rows"]):
+        rows = s["drive.rows"]
+        out.append(_line("drive", (f"through a spring of k_s = {s['drive.spring']:g} m c^2/a^2 per driven node to a "
+                                   f"rigid loader at v0" if s["drive.spring"] > 0 else "prescribed x")
+                         + (f"; rows {rows[0]} to {rows[1]} of the face" if rows else "")))
     out += [
         _line("wave speeds", f"c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})"),
         _line("Rayleigh speed", f"c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)"),

@@ -73,7 +73,8 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 # Scalars of one run (``Simulation.params``):
 #   n_ramp, n_drive_start   steps of the F_N ramp, and the first drive step
 #   drive                   0 no drive; DRIVE_X the driven face's x is prescribed; DRIVE_XY its y is also
-#                           held where it was when the drive started (``drive.hold = "xy"``)
+#                           held where it was when the drive started (``drive.hold = "xy"``); DRIVE_SPRING
+#                           or'ed in: the face is tied to a loader by springs instead (``drive.spring``)
 #   frame_every, n_frames   interface frame cadence (steps) and frames in this run
 #   frame_offset            index in the file of this run's frame 0 (a restart may change the cadence)
 #   check_every             steps between checks and agreements of the flags
@@ -82,10 +83,12 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   dt, v0, fext, jump      time step (a/c), drive speed (a c/a), load per node at full F_N, runaway limit (a)
 #   cf, inv_cf, damped      C = dt^2/(1 + zeta dt/2) in the state's float type, 1/C, zeta > 0
 #   event_limit             events a rank may hold at an agreement before every rank returns EVENTS_FULL
+#   spring, v0dt            the loader spring k_s (m c^2/a^2, with DRIVE_SPRING) and v0 dt (a), in the float type
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
-                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit")
+                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt")
 
 DRIVE_X, DRIVE_XY = 1, 2
+DRIVE_SPRING = 8
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
 # Other steps skip it: a store per driven node, 3 % of a small shear step.
@@ -130,14 +133,28 @@ def _flag(flags, bit, step, block, row, col, value):
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _drive(cy, px, py, r, j, drive, drive_on, shift, inv_cf):
-    """Set driven node (r, j) to its prescribed x; with KEEP_FORCE keep the force that took,
-    (x_drive - x_free) / C.  With DRIVE_XY its y stays where it was (u_y(n+1) = u_y(n): held since the
-    drive started)."""
-    target = drive.drive0[r, j] + shift
-    if drive_on & KEEP_FORCE:
-        drive.force[drive.index[r, j]] = (target - px[r, j]) * inv_cf
-    px[r, j] = target
+def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm):
+    """Drive node (r, j) of the driven face, once it has had its free update u(n+1) in ``px``.
+
+    Prescribed (DRIVE_SPRING unset): its x becomes drive0 + v0 (t(n+1) - t_drive); with KEEP_FORCE keep the
+    force that took, (x_drive - x_free) / C.  Through a spring (DRIVE_SPRING): the node feels
+    f = k_s (x_loader(n) - u_x(n)) from a rigid loader at x_loader(n) = drive0 + v0 (t(n) - t_drive), added
+    as any force is, u(n+1) += C f; KEEP_FORCE keeps f.  With DRIVE_XY its y stays where it was
+    (u_y(n+1) = u_y(n): held since the drive started).  A node of the face outside ``drive.rows`` has no
+    slot (index -1) and is left free."""
+    slot = drive.index[r, j]
+    if slot < 0:
+        return
+    if drive_on & DRIVE_SPRING:
+        f = prm.spring * (drive.drive0[r, j] + (shift - prm.v0dt) - cx[r, j])
+        px[r, j] += prm.cf * f
+        if drive_on & KEEP_FORCE:
+            drive.force[slot] = f
+    else:
+        target = drive.drive0[r, j] + shift
+        if drive_on & KEEP_FORCE:
+            drive.force[slot] = (target - px[r, j]) * prm.inv_cf
+        px[r, j] = target
     if drive_on & DRIVE_XY:
         py[r, j] = cy[r, j]
 
@@ -162,7 +179,7 @@ def _rows(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, driv
                      zeros, zero, g)
         if tk.drive and drive_on:
             for j in range(j0, j0 + n):
-                _drive(cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm.inv_cf)
+                _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
@@ -181,7 +198,7 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, drive, dri
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
             node_masked(cur_x, cur_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy)
         if tk.drive and drive_on:
-            _drive(cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm.inv_cf)
+            _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm)
 
 
 @njit(cache=True, _nrt=False)

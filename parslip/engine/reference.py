@@ -45,8 +45,9 @@ class Simulation:
         s, lat, mat = setup.scene, setup.lattice, setup.material
         if lat.rigid:
             raise NotImplementedError("the reference implementation has no rigid substrate")
-        if s["drive.hold"] != "x":
-            raise NotImplementedError("the reference implementation has only drive.hold = 'x'")
+        if s["drive.hold"] != "x" or s["drive.spring"] or s["drive.rows"]:
+            raise NotImplementedError("the reference implementation has only the paper's drive (drive.hold = "
+                                      "'x', drive.spring = 0, drive.rows = [])")
         unlike = setup.law.unlike_reference()
         if unlike:
             raise NotImplementedError(f"the reference implementation has not {', '.join(unlike)}")

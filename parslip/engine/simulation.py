@@ -53,13 +53,15 @@ class Simulation:
         cf = st.dt * st.dt / (1.0 + 0.5 * zeta * st.dt)
         self.params = L.Params(
             n_ramp=st.n_ramp, n_drive_start=st.n_drive_start,
-            drive=0 if sc["drive.mode"] == "none" else L.DRIVE_XY if sc["drive.hold"] == "xy" else L.DRIVE_X,
+            drive=0 if sc["drive.mode"] == "none" else (L.DRIVE_XY if sc["drive.hold"] == "xy" else L.DRIVE_X)
+            | (L.DRIVE_SPRING if sc["drive.spring"] > 0 else 0),
             frame_every=st.frame_every, n_frames=st.n_frames, frame_offset=0, check_every=CHECK_EVERY,
             has_iface=bool(lat.has_interface), rigid=bool(lat.rigid),
             brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),
             fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
             cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=bool(zeta > 0),
-            event_limit=self.event_limit)
+            event_limit=self.event_limit, spring=self.dtype.type(sc["drive.spring"]),
+            v0dt=self.dtype.type(st.v0 * st.dt))
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
         nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)

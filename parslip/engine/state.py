@@ -120,7 +120,8 @@ class State:
         # Drive -----------------------------------------------------------------
         # The OWNED driven nodes of the top block, in global id order, each with its slot in the drive's
         # force array (``loop.Drive``).
-        d = np.flatnonzero(lat.kinds(self.nodes(), sc["drive.mode"]) == DRIVEN) if sc["drive.mode"] != "none" \
+        d = np.flatnonzero(lat.kinds(self.nodes(), sc["drive.mode"], sc["drive.rows"]) == DRIVEN) \
+            if sc["drive.mode"] != "none" \
             else np.zeros(0, np.int64)
         self.driven_gid = self.gid[d]
         index = np.full(tl.shape, -1, np.int64)

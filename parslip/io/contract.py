@@ -17,9 +17,12 @@ The writer (``io.output``) creates exactly these datasets and the readers
                                                the block (m c^2/a, F_N's unit), summed in global site order:
                                                < 0 while the interface holds the block back
   /interface/drive_force     float64 [frames]  the sum over the driven nodes of the x-force the drive
-                                               applied in the step that ended at the frame (m c^2/a)
+                                               applied in the step that ended at the frame (m c^2/a): the
+                                               springs' force with drive.spring > 0
   /interface/mu              float64 [frames]  -F_T / F_N, the friction coefficient the interface mobilises
   /interface/step            int64   [frames]  the drive step of the frame (steps of dt; 0 = the drive's start)
+  /interface/loader          float64 [frames]  v0 t in l: where the loader is (drive.spring > 0: the rigid
+                                               loader the springs pull; else the driven face's prescribed x)
   /interface/kx, ky          float64 [sites]   each site's bond stiffnesses as the run used them (m c^2/a^2)
   /interface/delta_b         float64 [sites]   each site's breaking length as the run used it (a)
   /interface/events/         every bond break and re-formation of the run, in all phases (ramp, settle,
@@ -63,6 +66,7 @@ INTERFACE_DATASETS = {
     "mu": (np.float64, False, "-friction_force / F_N"),
 }
 INTERFACE_DATASETS["step"] = (np.int64, False, "drive steps (dt), 0 = the start of the drive")
+INTERFACE_DATASETS["loader"] = (np.float64, False, "l: the loader's (prescribed face's) x-displacement v0 t")
 INTERFACE_DATASETS["kx"] = (np.float64, False, "m c^2/a^2 (each site's bond, as the run used it)")
 INTERFACE_DATASETS["ky"] = (np.float64, False, "m c^2/a^2 (each site's bond, as the run used it)")
 INTERFACE_DATASETS["delta_b"] = (np.float64, False, "a (each site's breaking length, as the run used it)")
@@ -71,7 +75,7 @@ SITE_DATASETS = ("x", "kx", "ky", "delta_b")
 FRAME_FIELDS = ("intact", "partner", "ux", "uy", "sxy", "syy")
 # One value per frame, like ``time``.
 FORCE_DATASETS = ("friction_force", "drive_force", "mu")
-PER_FRAME_1D = ("time", "step") + FORCE_DATASETS
+PER_FRAME_1D = ("time", "step", "loader") + FORCE_DATASETS
 
 # The bond events: /interface/events/<name>, name: (dtype, units).
 EVENTS = "events"

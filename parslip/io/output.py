@@ -434,11 +434,14 @@ class Output:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         sums = self.forces(frames.fx[:count], frames.fdrive[:count])
         if self.root:
-            steps = frames.step[:count] - self.sim.setup.n_drive_start
+            st = self.sim.setup
+            steps = frames.step[:count] - st.n_drive_start
+            loader = steps * st.dt * st.v0 / st.l if st.scene["drive.mode"] != "none" else np.zeros(count)
 
             def put():
                 self._ds("interface/time")[k0:k0 + count] = times
                 self._ds("interface/step")[k0:k0 + count] = steps
+                self._ds("interface/loader")[k0:k0 + count] = loader
                 for name, values in sums.items():
                     self._ds(f"interface/{name}")[k0:k0 + count] = values
             self._write("interface/time", put)

@@ -168,13 +168,16 @@ class Lattice:
         return row + dr, (col + off + dx - noff).astype(np.int64)
 
     # -------------------------------------------------------- node sets ------
-    def kinds(self, nodes: dict[str, np.ndarray], mode: str) -> np.ndarray:
-        """FIXED for the substrate's bottom row AB, DRIVEN for the driven face."""
+    def kinds(self, nodes: dict[str, np.ndarray], mode: str, rows=None) -> np.ndarray:
+        """FIXED for the substrate's bottom row AB, DRIVEN for the driven face: with ``rows`` = (first, last)
+        only the face's rows first..last, counted from the interface row 0 (push and pull)."""
         kind = np.full(len(nodes["gid"]), FREE, np.int8)
         if self.has_interface:
             kind[(nodes["block"] == BOTTOM) & (nodes["row"] == 0)] = FIXED
         t = self.top
         top = nodes["block"] == TOP
+        if rows and mode in ("push", "pull"):
+            top = top & (nodes["row"] >= rows[0]) & (nodes["row"] <= rows[1])
         if mode == "push":      # T-: rear face SP, the first node of every top row
             kind[top & (nodes["col"] == t.col0)] = DRIVEN
         elif mode == "pull":    # T+: front face RQ, the last node of every top row

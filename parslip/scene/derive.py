@@ -76,17 +76,19 @@ class Setup:
 CACHE_HITS: set = set()
 
 
-def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float) -> tuple[float, str]:
+def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float, spring: float = 0.0, mode: str = "none",
+                     drive_rows=None) -> tuple[float, str]:
     """``model.stability.omega_max``, kept on disk between runs (``io.cache``)."""
     from ..io import cache
     b, t = lat.blocks
+    extra = dict(spring=float(spring), mode=mode, drive_rows=list(drive_rows or [])) if spring > 0 else {}
     k = cache.key(top=[t.rows, t.cols], bottom=[b.rows, b.cols], substrate=lat.substrate,
-                  kn=[float(v) for v in kn], kt=[float(v) for v in kt], kx=float(kx), ky=float(ky))
+                  kn=[float(v) for v in kn], kt=[float(v) for v in kt], kx=float(kx), ky=float(ky), **extra)
     hit = cache.lookup(k)
     if hit is not None:
         CACHE_HITS.add(hit)
         return hit
-    value = _omega_max(lat, kn, kt, kx, ky)
+    value = _omega_max(lat, kn, kt, kx, ky, spring, mode, drive_rows)
     cache.store(k, value)
     return value
 
@@ -103,7 +105,8 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     big = law.largest(lat.n_top_sites if lat.has_interface else 0)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         big["kx"], big["ky"])
+                                         big["kx"], big["ky"], scene["drive.spring"], scene["drive.mode"],
+                                         scene["drive.rows"])
     else:
         omega, method = omega
     limit = _dt_max(omega)

@@ -113,11 +113,26 @@ def resolve(raw: dict[str, Any], overrides: list[tuple[str, Any]] = ()) -> dict[
     return scene
 
 
+def _check_rows(s: dict[str, Any]) -> None:
+    rows = s["drive.rows"]
+    if not rows:
+        return
+    n = s["lattice.top_rows"]
+    accepted = f"accepted: [] (every row) or [first, last] with 0 <= first <= last < lattice.top_rows = {n}"
+    if s["drive.mode"] not in ("push", "pull"):
+        raise ConfigError(f"drive.rows = {rows!r}: only a push or a pull acts on chosen rows (drive.mode = "
+                          f"{s['drive.mode']!r} drives the whole top row SR); {accepted}, with drive.mode push or pull")
+    if not (len(rows) == 2 and all(isinstance(v, int) and not isinstance(v, bool) for v in rows)
+            and 0 <= rows[0] <= rows[1] < n):
+        raise ConfigError(f"drive.rows = {rows!r}: out of range; {accepted}")
+
+
 def _cross_checks(s: dict[str, Any]) -> None:
     if s["interface.delta_b"] <= s["interface.delta0"]:
         raise ConfigError(f"interface.delta_b = {s['interface.delta_b']!r}: must exceed interface.delta0 = "
                           f"{s['interface.delta0']!r}; accepted: delta_b > delta0 (in a)")
     check_patches(s["interface.patch"], s["interface.delta0"])
+    _check_rows(s)
     nu_hi = max_nu(s["material.model"])
     if s["material.nu"] > nu_hi:
         raise ConfigError(f"material.nu = {s['material.nu']!r}: gives k_t < 0 in {s['material.model']}; "

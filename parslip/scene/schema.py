@@ -118,6 +118,13 @@ SCHEMA: dict[str, Key] = {
     "drive.hold": Key("x", str, "-", "'x' or 'xy'", _choice("x", "xy"),
                       "what the drive prescribes on the driven face: x only (y free), or x and y (y held at "
                       "its value when the drive starts)"),
+    "drive.spring": Key(0.0, float, "m c^2/a^2", ">= 0 (0 = prescribed motion, the paper)", _range(0.0),
+                        "stiffness of the spring that ties each driven node to a rigid loader moving at v0 (a "
+                        "compliant load cell: the contact can stick and slip); enters omega_max"),
+    "drive.rows": Key([], list, "rows", "[] (every row) or [first, last] with 0 <= first <= last < top_rows; "
+                      "push and pull only", lambda v: isinstance(v, list),
+                      "the rows of the driven face the push or pull acts on, counted from the interface row 0 "
+                      "(a loading point at a chosen height)"),
     "drive.v0": Key(1e-3, float, "c_r", "> 0", _range(0.0, lo_open=True), "drive velocity"),
     "drive.duration": Key(100.0, float, "l/c_r", "> 0", _range(0.0, lo_open=True),
                           "simulated drive time after settling"),
