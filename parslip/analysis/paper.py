@@ -111,9 +111,15 @@ def _stretch(front, lo: float, hi: float) -> np.ndarray:
 
 
 def steady_speed(front, lo: float = STEADY[0], hi: float = STEADY[1]) -> float:
-    """Median |v|/c_r of a front while its distance from its nucleation site is within [lo, hi] l."""
-    v = np.abs(front.tip["v"][_stretch(front, lo, hi)])
+    """Median |v|/c_r of a front while its distance from its nucleation site is within [lo, hi] l (a burst's
+    sites, which carry no speed, left out)."""
+    v = _speeds(np.abs(front.tip["v"][_stretch(front, lo, hi)]))
     return float(np.median(v)) if len(v) else math.nan
+
+
+def _speeds(v: np.ndarray) -> np.ndarray:
+    """The local speeds that are speeds: a burst's sites hold NaN (``analysis.fronts``)."""
+    return v[np.isfinite(v)]
 
 
 def steady_speeds(run, n: int = 4) -> list[float]:
@@ -172,12 +178,14 @@ def max_speed_near_far_edge(run, within: float = 0.3) -> float:
     f = fr[0]
     far = 0.0 if run.mode == "pull" else 1.0
     m = np.abs(f.tip["x"] - far) <= within
-    return float(np.max(np.abs(f.tip["v"][m]))) if m.any() else math.nan
+    v = _speeds(np.abs(f.tip["v"][m]))
+    return float(np.max(v)) if len(v) else math.nan
 
 
 def _speed_in(front, t0: float, t1: float) -> float:
     m = (front.tip["t"] > t0) & (front.tip["t"] <= t1)
-    return float(np.median(np.abs(front.tip["v"][m]))) if m.any() else math.nan
+    v = _speeds(np.abs(front.tip["v"][m]))
+    return float(np.median(v)) if len(v) else math.nan
 
 
 def trailing_speedup(run, window: float = 3.0) -> float:
@@ -199,7 +207,7 @@ def crack_speed(run, front_index: int = 0, past: float = 0.2) -> float:
     if len(fr) <= front_index:
         return math.nan
     f = fr[front_index]
-    v = np.abs(f.tip["v"][np.abs(f.tip["x"] - f.nucleation_x) > past])
+    v = _speeds(np.abs(f.tip["v"][np.abs(f.tip["x"] - f.nucleation_x) > past]))
     return float(np.median(v)) if len(v) else math.nan
 
 
