@@ -327,14 +327,22 @@ def _rebond_frame(intact: np.ndarray, k: int, s: int) -> int:
     return k + int(on[0]) if len(on) else intact.shape[0] - 1
 
 
+def tip_frames(run, front) -> np.ndarray:
+    """The frame that first shows each of the front's breaks: ``tip["frame"]`` (tips from the exact events
+    fall between frames), or the frame at each arrival time for a catalogue read off the frames."""
+    if "frame" in front.tip:
+        return np.asarray(front.tip["frame"], np.int64)
+    return np.array([run.frame_at(t) for t in front.tip["t"]], np.int64)
+
+
 def _passage_frames(run) -> dict:
     """site -> sorted arrival frames of every catalogued front there."""
     out: dict[int, list[int]] = {}
     x = run.x
     for f in run.fronts():
-        for xx, tt in zip(f.tip["x"], f.tip["t"]):
+        for xx, k in zip(f.tip["x"], tip_frames(run, f)):
             s = int(np.argmin(np.abs(x - xx)))
-            out.setdefault(s, []).append(run.frame_at(tt))
+            out.setdefault(s, []).append(k)
     return {s: sorted(v) for s, v in out.items()}
 
 
@@ -354,9 +362,8 @@ def passage_slip(run, front_index: int, margin: float = MARGIN) -> float:
     m = int(round(margin / dtf))
     passes = _passage_frames(run)
     out = []
-    for xx, tt in zip(f.tip["x"], f.tip["t"]):
+    for xx, k in zip(f.tip["x"], tip_frames(run, f)):
         s = int(np.argmin(np.abs(run.x - xx)))
-        k = run.frame_at(tt)
         ks = passes.get(s, [k])
         i = ks.index(k) if k in ks else int(np.argmin(np.abs(np.array(ks) - k)))
         lo = (ks[i - 1] + k) // 2 if i > 0 else 0
@@ -510,7 +517,7 @@ def same_slip_everywhere(run, points=(0.0, 0.35, 0.98)) -> float:
         hit = np.flatnonzero(np.isclose(f.tip["x"], run.x[s]))
         if not len(hit):
             return math.nan
-        k = run.frame_at(f.tip["t"][hit[0]])
+        k = int(tip_frames(run, f)[hit[0]])
         k1 = min(len(run.times) - 1, _rebond_frame(it, k, s) + m)
         vals.append(ux[k1, s] - ux[max(0, k - m), s])
     vals = np.abs(vals)
@@ -661,9 +668,8 @@ def rebond_after_crossing(run, front_index: int = 0) -> float:
     it = run.interface["intact"]
     t_end = float(f.tip["t"][-1])
     first = math.inf
-    for xx, tt in zip(f.tip["x"], f.tip["t"]):
+    for xx, k in zip(f.tip["x"], tip_frames(run, f)):
         s = int(np.argmin(np.abs(run.x - xx)))
-        k = run.frame_at(tt)
         on = np.flatnonzero(it[k:, s] == 1)
         if len(on):
             first = min(first, float(run.times[k + on[0]]))
@@ -679,9 +685,8 @@ def rebond_unevenness(run, front_index: int = 0) -> float:
     f = fr[front_index]
     it = run.interface["intact"]
     d = []
-    for xx, tt in zip(f.tip["x"], f.tip["t"]):
+    for xx, k in zip(f.tip["x"], tip_frames(run, f)):
         s = int(np.argmin(np.abs(run.x - xx)))
-        k = run.frame_at(tt)
         d.append(float(run.times[_rebond_frame(it, k, s)] - run.times[k]))
     d = np.array(d)
     med = float(np.median(d))
