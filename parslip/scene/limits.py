@@ -89,8 +89,19 @@ def check_scene(s: dict) -> None:
                 f"{wave} = {lim:.6g} (in c_r)")
 
 
+# The bond table holds the healing clock in the state's float type: float32 counts steps exactly to 2^24.
+FLOAT32_STEPS = 2 ** 24
+
+
 def check_setup(st) -> None:
-    """Refuse a drive that moves its face RUNAWAY_JUMP or more per step (needs dt, so after derive)."""
+    """Refuse a drive that moves its face RUNAWAY_JUMP or more per step, and a healing clock the state's
+    float type cannot count (both need dt, so after derive)."""
+    n_heal = st.law.heal_time * st.t_unit / st.dt
+    if st.precision == "float32" and n_heal + 1 >= FLOAT32_STEPS:
+        hi = (FLOAT32_STEPS - 2) * st.dt / st.t_unit
+        raise ConfigError(f"interface.heal_time = {st.law.heal_time!r}: {n_heal:.4g} steps of dt, more than a float32 "
+                          f"state counts exactly (2^24); accepted: interface.heal_time < {hi:.4g} l/c_r, or "
+                          f"time.precision = 'float64'")
     if st.scene["drive.mode"] == "none":
         return
     step = st.v0 * st.dt
