@@ -13,6 +13,9 @@ once, when it is first imported, and the code asks ``hooks.get(NAME)``:
                             rank that answers heartbeats but never reaches the collective the others are in)
   kill_in_checkpoint=K      the process writing the K-th checkpoint kills itself with SIGKILL halfway through
   write_error_at_frame=K    writing interface frame K or later fails with ENOSPC (a full disk)
+  hold_at_frame=K           rank 0, about to write interface frame K or later, creates OUT.held and waits
+                            (up to 120 s) until the test removes it: a test can fill the disk mid-run
+                            however fast the host runs
 
 For example ``PARSLIP_TEST_HOOKS="raise_at=1:300"``.  Unset, every hook is
 None and costs nothing.  A malformed value is bad input (exit 2), named.
@@ -27,7 +30,7 @@ VARIABLE = "PARSLIP_TEST_HOOKS"
 
 # name: how its value is read
 _PAIRS = ("raise_at", "stop_at", "block_at")
-_INTS = ("kill_in_checkpoint", "write_error_at_frame")
+_INTS = ("kill_in_checkpoint", "write_error_at_frame", "hold_at_frame")
 
 
 def parse(text: str | None) -> dict:

@@ -148,6 +148,8 @@ def cmd_fronts(args) -> int:
         return 0
     print(f"{args.run}: {run.mode}, v0/c_r = {run.v0:g}, {len(run.times)} frames x {len(run.x)} sites; "
           f"{len(fr)} rupture fronts")
+    if run.status != "complete":      # a run still written, stopped or failed: only its frames on disk count
+        print(f"  status {run.status!r}: the file holds the {len(run.times)} frames it had written to disk")
     if fr:
         print(table(fr, fates, {p.index: p.arrest_length for p in pre}))
     if has_mu:

@@ -108,7 +108,8 @@ class Output:
         self._handles = {}
         self._error = None                 # the first failed write on this rank: (what, OSError text)
         self._flushed = time.monotonic()   # rank 0's clock: when the file was last flushed
-        self.frames_safe = 0               # frames written before the first failed write
+        self.frames_safe = 0               # frames on disk: frames_written at the last successful flush
+        self._frames_set = 0               # frames_written as last set (on disk at the next flush)
         st, lay, lat = sim.setup, sim.layout, sim.setup.lattice
         self.rank = lay.rank
         self.size = lay.size
@@ -242,8 +243,10 @@ class Output:
         if err:
             self._error = err
             what, text = err
-            safe = (f"frames 0 to {self.frames_safe - 1} of the interface record were written before"
-                    if self.frames_safe else "no frame of the interface record was written")
+            # What the file holds is what its last successful flush put on disk: HDF5 keeps the rest,
+            # frames_written among it, in memory until the next flush, which a full disk refuses.
+            safe = (f"frames 0 to {self.frames_safe - 1} of the interface record reached the disk before"
+                    if self.frames_safe else "no frame of the interface record reached the disk")
             where = f"dataset /{what}" if not what.startswith("(") else what.strip("()")
             raise WriteError(f"cannot write {self.path} ({text}; {where}); {safe}", path=self.path,
                              frames_safe=self.frames_safe)
@@ -426,10 +429,7 @@ class Output:
         recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``)."""
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
-        fail = hooks.get("write_error_at_frame")
-        if fail is not None and self.rank == 0 and k0 + count > fail and self._error is None:
-            self._error = ("interface/intact", f"OSError: [Errno 28] No space left on device (injected by "
-                                               f"{hooks.VARIABLE})")
+        self._test_hooks(k0 + count)
         for name in FRAME_FIELDS:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         sums = self.forces(frames.fx[:count], frames.fdrive[:count])
@@ -454,8 +454,26 @@ class Output:
             if due:
                 self._write("(flushing to disk)", self.f.flush)
                 self._flushed = time.monotonic()
+        self._frames_set = k0 + count
         self._agree_write()
-        self.frames_safe = k0 + count
+        if due:
+            self.frames_safe = self._frames_set
+
+    def _test_hooks(self, frames_end: int):
+        """``hooks``: a failed write from frame ``write_error_at_frame`` on, or a hold at ``hold_at_frame``."""
+        if self.rank != 0:
+            return
+        fail, hold = hooks.get("write_error_at_frame"), hooks.get("hold_at_frame")
+        if fail is not None and frames_end > fail and self._error is None:
+            self._error = ("interface/intact", f"OSError: [Errno 28] No space left on device (injected by "
+                                               f"{hooks.VARIABLE})")
+        if hold is not None and frames_end > hold and not getattr(self, "_held", False):
+            self._held = True
+            marker = f"{self.path}.held"
+            open(marker, "w").close()
+            deadline = time.monotonic() + 120
+            while os.path.exists(marker) and time.monotonic() < deadline:
+                time.sleep(0.02)
 
     def interface_events(self, k0: int, steps, sites, kinds, partners, time_of) -> int:
         """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``)
@@ -552,6 +570,7 @@ class Output:
             self._write("(flushing to disk)", self.f.flush)
             self._flushed = time.monotonic()
         self._agree_write()
+        self.frames_safe = self._frames_set
 
     def set_attrs(self, attrs: dict):
         """Root attributes (collective under mpio): e.g. the run's timings (``contract.TIMINGS``)."""
