@@ -16,6 +16,8 @@ once, when it is first imported, and the code asks ``hooks.get(NAME)``:
   hold_at_frame=K           rank 0, about to write interface frame K or later, creates OUT.held and waits
                             (up to 120 s) until the test removes it: a test can fill the disk mid-run
                             however fast the host runs
+  hold_before_picture=1     rank 0 of `parslip run`, about to draw the space-time picture of a complete run,
+                            creates PNG.held and waits (up to 120 s) until it is removed or a signal comes
 
 For example ``PARSLIP_TEST_HOOKS="raise_at=1:300"``.  Unset, every hook is
 None and costs nothing.  A malformed value is bad input (exit 2), named.
@@ -30,7 +32,7 @@ VARIABLE = "PARSLIP_TEST_HOOKS"
 
 # name: how its value is read
 _PAIRS = ("raise_at", "stop_at", "block_at")
-_INTS = ("kill_in_checkpoint", "write_error_at_frame", "hold_at_frame")
+_INTS = ("kill_in_checkpoint", "write_error_at_frame", "hold_at_frame", "hold_before_picture")
 
 
 def parse(text: str | None) -> dict:

@@ -217,3 +217,30 @@ def test_an_output_that_cannot_fit_is_refused_at_once(tmp_path, tiny_disk):
     p = run_cli(1, "run", scene, "--out", tiny_disk / "o.vtkhdf", "--no-png", "--quiet", timeout=120)
     assert p.returncode == 2, p.stderr
     assert "MiB free" in p.stderr and "accepted:" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_sigterm_while_the_picture_is_drawn_exits_0(tmp_path):
+    """The batch system's SIGTERM comes after the drive, while rank 0 draws the picture (held there by the
+    test hook): the run is complete, so the job exits 0 with a line saying what was skipped, not 15."""
+    out = tmp_path / "o.vtkhdf"
+    scene = tmp_path / "s.toml"
+    scene.write_text(small_toml(**{"drive.duration": 2.0}))
+    held = tmp_path / "o_spacetime.png.held"
+    proc = subprocess.Popen(cli_command(2, "run", scene, "--out", out), env=cli_env(**{HOOKS: "hold_before_picture=1"}),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not held.exists():
+            assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read() if proc.poll() else ""
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGTERM)          # as Slurm does: every process of the job step
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 0, err[-3000:]
+    lines = [ln for ln in err.splitlines() if ln.startswith("parslip:")]
+    assert len(lines) == 1 and "SIGTERM came after the run was complete" in lines[0], err[-3000:]
+    assert _status(out) == "complete"
+    assert not (tmp_path / "o_spacetime.png").exists()

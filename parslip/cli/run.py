@@ -5,7 +5,8 @@ started several processes, sets up logging, calls the API and maps how the
 run ended to an exit code and one line:
 
   0    complete, or stopped with a checkpoint (SIGTERM, SIGUSR1, --stop-after): the line says how to
-       continue
+       continue; a SIGTERM or SIGUSR1 that comes after the run is complete, while rank 0 prints the
+       catalogue or draws the picture, skips what is left of that with a line and still exits 0
   130  interrupted by Ctrl-C, with a checkpoint
   2    bad input (ConfigError)
   3    a run that failed on the way (RunError), or the job aborted by the watchdog or by a signal that
@@ -63,14 +64,36 @@ def cmd_run(args, comm) -> int:
             _exit_now(comm, EXIT_RUN_FAILED)
         return EXIT_RUN_FAILED
     oc = result.outcome
+    if oc.complete:
+        _after_the_run_signals_skip(rank)
     if not oc.complete:
         if rank == 0:
             print(f"parslip: {oc.status}; output kept in {oc.out}; continue with:\n"
                   f"  {continue_command(args.scene, args.set, oc.out, oc.checkpoint, size)}", file=sys.stderr)
         return EXIT_INTERRUPTED if oc.interrupted else 0
     if rank == 0 and oc.step:
-        _report(result, args, log)
+        try:
+            _report(result, args, log)
+        except _Skipped as e:
+            print(f"parslip: {e} came after the run was complete: the catalogue or the picture was skipped; "
+                  f"the run is complete in {oc.out}", file=sys.stderr)
     return 0
+
+
+class _Skipped(Exception):
+    """A batch system's signal that came while rank 0 reports a run that is already complete."""
+
+
+def _after_the_run_signals_skip(rank: int):
+    """A complete run is done: the batch system's SIGTERM (or SIGUSR1, the early warning) that comes while
+    the report is made ends that report, not the job with the signal's exit code.  Rank 0 leaves the report;
+    the other ranks have nothing left to do and ignore it."""
+    import signal
+
+    def skip(signum, frame):
+        raise _Skipped(signal.Signals(signum).name)
+    for sig in (signal.SIGTERM, signal.SIGUSR1):
+        signal.signal(sig, skip if rank == 0 else signal.SIG_IGN)
 
 
 def _exit_now(comm, code: int):
@@ -86,6 +109,17 @@ def _exit_now(comm, code: int):
     os._exit(code)
 
 
+def _hold_before_picture(png: str):
+    """The test hook ``hold_before_picture``: wait here, as a slow picture would, until the test says."""
+    from .. import hooks
+    if hooks.get("hold_before_picture"):
+        marker = f"{png}.held"
+        open(marker, "w").close()
+        deadline = time.monotonic() + 120
+        while os.path.exists(marker) and time.monotonic() < deadline:
+            time.sleep(0.02)
+
+
 def _report(result, args, log):
     """Rank 0, after a complete run: the front catalogue, and the space-time picture with its cost."""
     from .. import analysis
@@ -97,6 +131,7 @@ def _report(result, args, log):
     t0 = time.monotonic()
     title = f"{os.path.basename(args.scene)}: {result.scene.get('drive.mode')}, " \
             f"v0/c_r = {result.scene.get('drive.v0'):g}"
+    _hold_before_picture(png)
     try:
         analysis.spacetime_png(result.interface, png, title)
     except OSError as e:
