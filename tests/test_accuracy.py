@@ -95,10 +95,13 @@ def test_tiny_study_end_to_end(tmp_path, capsys):
     argv = ["accuracy", str(sc), "-o", str(out), "--quick", "--knob", "time_step", "--knob", "precision",
             "--duration", "4"]
     assert main(argv) == 0
-    lines = (out / "accuracy.csv").read_text().splitlines()
-    head = lines[0].split(",")
-    rows = [dict(zip(head, line.split(","))) for line in lines[1:]]
+    import csv
+    import json
+    rows = list(csv.DictReader((out / "accuracy.csv").open()))
     ts = [r for r in rows if r["knob"] == "time_step"]
+    # Each row says which scene ran (flat dotted keys, the knob's key at the setting's value) and at what commit.
+    assert json.loads(ts[1]["scene"])["time.safety"] == 0.9 and json.loads(ts[0]["scene"])["time.safety"] == 0.1
+    assert all(r["commit"] for r in rows if r["status"] == "ok")
     assert [r["setting"] for r in ts] == ["safety 0.1", "safety 0.9"]
     assert float(ts[0]["speed_rel"]) == 0 and float(ts[1]["wall_s"]) > 0
     assert math.isfinite(float(ts[1]["first_break_t_l/c_r"]))

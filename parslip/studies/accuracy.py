@@ -235,6 +235,8 @@ def study(scene: str, out_dir: str, knobs=None, quick: bool = False, duration: f
     of ``metrics``, or a status of ``unavailable`` / ``failed: ...``; a knob
     with a ``limit`` adds rows of its other settings measured against it.
     """
+    import json
+
     from ..errors import ConfigError
     from ..scene.load import load, overrides
     from ..analysis.results import open as open_run
@@ -245,13 +247,13 @@ def study(scene: str, out_dir: str, knobs=None, quick: bool = False, duration: f
     base_over = {**fine, **dict(overrides(sets)), "drive.duration": float(dur), "output.snapshots": 0}
     base_sets = [f"{k}={_toml(v)}" for k, v in base_over.items()]
     os.makedirs(out_dir, exist_ok=True)
-    done: dict[tuple, RunResult] = {}
+    done: dict[str, RunResult] = {}
 
     def run(label: str, over: dict) -> RunResult:
         try:                            # the resolved scene: settings that spell the same scene share a run
-            key = tuple(sorted(load(scene, {**base_over, **over}).items()))
+            key = json.dumps(load(scene, {**base_over, **over}), sort_keys=True, default=str)
         except ConfigError:
-            key = tuple(sorted(over.items()))
+            key = json.dumps(over, sort_keys=True, default=str)
         if key not in done:
             path = os.path.join(out_dir, _slug(label) + ".vtkhdf")
             log.info(f"running {label}: {' '.join(f'{k}={v}' for k, v in over.items())}")
@@ -280,6 +282,7 @@ def study(scene: str, out_dir: str, knobs=None, quick: bool = False, duration: f
                 row["status"] = f"failed: {(res.error or ref.error)[:120]}"
             else:
                 row.update(metrics(open_run(res.path), ref_run))
+            row.update(provenance(res.path) if res.code == 0 else {})
             rows.append(row)
             if row["status"] != "ok":
                 log.info(f"{knob.name} {setting.label}: {row['status']}")
@@ -300,16 +303,28 @@ def _against_limit(knob: Knob, rows: list[dict], results: dict) -> list[dict]:
     for label, r in mine.items():
         if label == knob.limit or r["status"] != "ok":
             continue
-        row = {k: r[k] for k in ("knob", "setting", "wall_s", "solver_s", "drive_s", "drive_cpu_s", "status")}
+        row = {k: r[k] for k in ("knob", "setting", "wall_s", "solver_s", "drive_s", "drive_cpu_s", "status",
+                                 "scene", "commit") if k in r}
         row.update({"against": knob.limit, "reference": False, "vs_limit": True}, **metrics(open_run(results[label].path), lim_run))
         out.append(row)
     return out
+
+
+def provenance(path: str) -> dict:
+    """The row's ``scene`` (the resolved scene that ran, JSON of flat dotted keys, as the sweep tables
+    have it) and ``commit`` (the git commit the run file records)."""
+    import json
+
+    from ..analysis.results import open as open_run
+    run = open_run(path)
+    return {"scene": json.dumps(run.scene, sort_keys=True), "commit": str(run.attrs.get("git_commit", ""))}
 
 
 # --- reports ------------------------------------------------------------------------
 
 COLUMNS = ("knob", "setting", "against", "reference", "status", "wall_s", "solver_s", "drive_s",
            "drive_cpu_s") + METRICS
+PROVENANCE = ("scene", "commit")          # in the CSV, not in the Markdown table
 UNITS = {"wall_s": "s", "solver_s": "s", "drive_s": "s", "drive_cpu_s": "s", "first_break_t": "l/c_r", "first_break_x": "l", "interval": "rel", "speed": "rel",
          "slip": "rel", "spacetime": "fraction"}
 
@@ -320,21 +335,33 @@ def _cell(v) -> str:
     return str(v)
 
 
+def _header(c: str) -> str:
+    return f"{c}_{UNITS[c]}" if c in UNITS and not c.endswith("_s") else c
+
+
 def to_csv(rows: list[dict]) -> str:
-    head = ",".join(f"{c}_{UNITS[c]}" if c in UNITS and not c.endswith("_s") else c for c in COLUMNS)
-    return head + "\n" + "".join(",".join(_cell(r.get(c, "")).replace(",", ";") for c in COLUMNS) + "\n"
-                                 for r in rows)
+    """One row per setting, with the scene that ran and its commit (quoted as CSV quotes)."""
+    import csv
+    import io
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow([_header(c) for c in COLUMNS + PROVENANCE])
+    for r in rows:
+        w.writerow([_cell(r.get(c, "")) for c in COLUMNS + PROVENANCE])
+    return buf.getvalue()
 
 
 def from_csv(text: str) -> list[dict]:
     """The rows of an ``accuracy.csv`` (``to_csv``) back, to redraw the reports without rerunning:
     numbers as floats (an empty cell as NaN), ``reference`` as a bool, and ``vs_limit`` set on the rows
     measured against a knob's limit rather than its reference."""
-    lines = text.strip().splitlines()
+    import csv
+    import io
     refs = {k.name: k.reference.label for k in KNOBS}
+    names = {_header(c): c for c in COLUMNS + PROVENANCE}
     rows = []
-    for line in lines[1:]:
-        r = dict(zip(COLUMNS, line.split(",")))
+    for raw in csv.DictReader(io.StringIO(text)):
+        r = {names.get(k, k): v for k, v in raw.items()}
         for c in COLUMNS[5:]:
             r[c] = float(r[c]) if r.get(c) else math.nan
         r["reference"] = r["reference"] == "True"
