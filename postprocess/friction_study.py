@@ -66,7 +66,7 @@ def fs_figure(tab, out):
     ax.legend(fontsize=7)
     ax.set_title("static friction force against normal load, v0/c_r = 1e-3;\ndashed: F_0 + mu_i F_N fitted "
                  "over F_N <= 2", fontsize=8)
-    save(fig, out, "friction_Fs_FN")
+    save(fig, out, "friction_Fs_FN", tab)
     os.remove(os.path.join(out, "friction_Fs_FN.pdf"))
     return lines
 
@@ -97,6 +97,7 @@ def main():
     for s in SWEEPS:
         path = os.path.join(a.dir, s, "summary.csv")
         tabs[s] = table.read(path)
+        os.makedirs(a.tables or a.out, exist_ok=True)
         shutil.copy(path, os.path.join(a.tables or a.out, f"friction_{s}.csv"))
     L = tabs["loading"]
     for color in ("mu_s", "F_s", "n_precursors"):

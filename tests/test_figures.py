@@ -204,3 +204,21 @@ def test_push_against_pull_speeds_on_a_log_axis(small_run, tmp_path, monkeypatch
     figures.compare_speeds([run, run], str(tmp_path), n=1, scale="c_r")
     figures.compare_speeds([run, run], str(tmp_path), n=1, scale="v0")
     assert scales == [["log"], ["linear"]]
+
+
+def test_a_figure_carries_the_scene_and_commit_it_was_drawn_from(tmp_path):
+    """analysis.provenance: savefig's text chunks, a stamp on a finished PNG, read back the same."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from parslip.analysis import provenance
+    from parslip.analysis.figures import save
+    src = {"scene": {"drive.mode": "push", "load.FN": 1.0}, "commit": "abc123"}
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    png, pdf = save(fig, str(tmp_path), "f", src)
+    assert provenance.read_png(png) == {"commit": ["abc123"], "scenes": [src["scene"]]}
+    table = {"scene": ['{"load.FN": 1.0}', '{"load.FN": 2.0}'], "commit": ["c1", "c1"]}
+    provenance.stamp_png(png, table)
+    assert provenance.read_png(png) == {"commit": ["c1"], "scenes": [{"load.FN": 1.0}, {"load.FN": 2.0}]}
+    assert b"parslip:commit c1" not in open(pdf, "rb").read() and b"abc123" in open(pdf, "rb").read()

@@ -35,14 +35,16 @@ def pyplot():
     return plt
 
 
-def save(fig, out_dir: str, name: str) -> list[str]:
-    """Write ``name``.png and ``name``.pdf in ``out_dir``; close the figure; return both paths."""
+def save(fig, out_dir: str, name: str, source=None) -> list[str]:
+    """Write ``name``.png and ``name``.pdf in ``out_dir``, stamped with the scene(s) and commit of
+    ``source`` (runs or a sweep table: ``analysis.provenance``); close the figure; return both paths."""
+    from .provenance import savefig_metadata
     plt = pyplot()
     os.makedirs(out_dir, exist_ok=True)
     paths = [os.path.join(out_dir, f"{name}.{ext}") for ext in ("png", "pdf")]
     fig.tight_layout()
-    for p in paths:
-        fig.savefig(p, dpi=150)
+    for p, ext in zip(paths, ("png", "pdf")):
+        fig.savefig(p, dpi=150, metadata=savefig_metadata(ext, source))
     plt.close(fig)
     return paths
 
@@ -70,7 +72,7 @@ def _finish(fig, axes, run, out_dir: str, name: str, xlabel: str, ylabels, with_
     if with_legend:
         legend(axes[0], 7)
     axes[0].set_title(_title(run), fontsize=8)
-    return save(fig, out_dir, name)
+    return save(fig, out_dir, name, run)
 
 
 # --- space-time and speeds ------------------------------------------------------
@@ -142,7 +144,7 @@ def fig_spacetime(run, out_dir: str) -> list[str]:
             ax.set_ylim(*lim)
             ax.set_title(f"zoom: t c_r/l = {lim[0]:.1f} to {lim[1]:.1f}", fontsize=8)
     axes[0, 0].set_title(_title(run) + "\nintact yellow, broken white; detected tips", fontsize=8)
-    return save(fig, out_dir, "spacetime")
+    return save(fig, out_dir, "spacetime", run)
 
 
 def fig_front_speed(run, out_dir: str, n: int = 4) -> list[str]:
@@ -269,7 +271,7 @@ def fig_mode2(run, out_dir: str, n_fronts: int = 3) -> tuple[list[str], list[dic
     ax.set_ylabel("sigma_xy / rho c_r^2")
     legend(ax, 6)
     ax.set_title(_title(run) + "\nK_II in rho c_r^2 l^1/2, x_p in l", fontsize=8)
-    paths = save(fig, out_dir, "mode2_fit")
+    paths = save(fig, out_dir, "mode2_fit", run)
     csv = os.path.join(out_dir, "mode2_fit.csv")
     with open(csv, "w") as fh:
         fh.write("front,t_l_per_cr,K_II_rho_cr2_sqrt_l,x_p_l,sigma_max_rho_cr2\n")
@@ -459,7 +461,7 @@ def fig_friction(run, out_dir: str) -> list[str]:
     bx.set_ylabel("x_tip / l")
     bx.set_ylim(0, 1)
     bx.set_xlabel("t c_r / l")
-    return save(fig, out_dir, "friction")
+    return save(fig, out_dir, "friction", run)
 
 
 FIGURES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "slip_records",
@@ -534,4 +536,4 @@ def compare_speeds(runs: list, out_dir: str, n: int = 3, scale: str = "auto", na
         ax.set_xlabel("x_tip / l" if scale == "v0" else "distance from the nucleation site / l")
         ax.set_ylabel("v / v0" if scale == "v0" else "|v| / c_r")
         legend(ax, 6)
-    return save(fig, out_dir, name), rows
+    return save(fig, out_dir, name, list(runs)), rows

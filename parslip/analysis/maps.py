@@ -125,7 +125,9 @@ def draw_map(tab: dict, x: str, y: str, color: str, png: str, *, where: dict | N
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.25, 1.0), borderaxespad=0.0)
     ax.set_title(title or f"{color} over {x} and {y}", fontsize=9)
     fig.tight_layout()
-    fig.savefig(png, dpi=130)
+    from .provenance import savefig_metadata
+    source = {"scene": tab["scene"], "commit": tab["commit"]} if "scene" in tab and "commit" in tab else None
+    fig.savefig(png, dpi=130, metadata=savefig_metadata("pdf" if png.endswith(".pdf") else "png", source))
     plt.close(fig)
     return png
 

@@ -210,6 +210,8 @@ def render_frame(run, field: str, time: float | None, png: str, *, clim=None, wi
         focal, half_h = sc.frame_on(mesh)
         sc.draw(mesh, field, f, clim, t)
         sc.pl.screenshot(png)
+        from .provenance import stamp_png
+        stamp_png(png, run)
         return Frame(k, t, clim, png, tuple(window), focal, half_h)
     finally:
         sc.close()

@@ -421,7 +421,8 @@ def pareto_png(rows: list[dict], out_dir: str, title: str = "") -> list[str]:
         legend(ax, 6)
     fig.suptitle((title + ": " if title else "") + "error against run time (hollow: each knob's reference)",
                  fontsize=9)
-    return save(fig, out_dir, "accuracy_pareto")
+    ok = [r for r in rows if r.get("scene")]
+    return save(fig, out_dir, "accuracy_pareto", {"scene": [r["scene"] for r in ok], "commit": [r["commit"] for r in ok]})
 
 
 def write_reports(rows: list[dict], out_dir: str, title: str = "") -> list[str]:
