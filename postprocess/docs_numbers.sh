@@ -9,29 +9,32 @@
 #   bash postprocess/docs_numbers.sh paper      # docs/studies/img/ figures of the paper page (~6 min)
 #   bash postprocess/docs_numbers.sh scaling    # docs/hpc/shear_l500_*.png and the l = 500 run's numbers (~4 min, 2 ranks)
 #
-# OUT (default out/docs) keeps the runs; NP (default 2) is the rank count of the parallel ones; the
-# numbers the pages quote are printed (or left in OUT) for the page to be rewritten from.
+# OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
+# outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
+# NP (default 2) is the rank count of the parallel runs.  The numbers the pages quote are printed (or
+# left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 what=${1:?"usage: $0 accuracy|friction|paper|scaling"}
 OUT=${OUT:-out/docs}
+DOCS=${DOCS:-docs}
 NP=${NP:-2}
 PY=${PYTHON:-python}
 MPIEXEC=${MPIEXEC:-mpiexec}
-mkdir -p "$OUT"
+mkdir -p "$OUT" "$DOCS/studies/img" "$DOCS/hpc"
 case "$what" in
 accuracy)
     for s in push shear; do
         "$PY" -m parslip accuracy "run/$s.toml" -o "$OUT/acc_$s" --repeat 2
-        cp "$OUT/acc_$s/accuracy.csv" "docs/studies/accuracy_$s.csv"
-        cp "$OUT/acc_$s/accuracy_pareto.png" "docs/studies/accuracy_pareto_$s.png"
+        cp "$OUT/acc_$s/accuracy.csv" "$DOCS/studies/accuracy_$s.csv"
+        cp "$OUT/acc_$s/accuracy_pareto.png" "$DOCS/studies/accuracy_pareto_$s.png"
         cat "$OUT/acc_$s/accuracy.md"
     done ;;
 friction)
     for s in loading rate stiffness_push stiffness_shear; do
         "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "run/studies/friction_$s.toml" -o "$OUT/friction/$s"
     done
-    "$PY" postprocess/friction_study.py --dir "$OUT/friction" -o docs/studies/img --tables docs/studies ;;
+    "$PY" postprocess/friction_study.py --dir "$OUT/friction" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 paper)
     "$PY" -m parslip paper -o "$OUT/paper"
     f="$OUT/paper/figures"
@@ -39,17 +42,17 @@ paper)
                 push/front_speed:push_front_speed shear/front_speed:shear_front_speed \
                 push/pulse_width:push_pulse_width push/slip_records:push_slip_records \
                 shear_l500/spacetime:shear_l500_spacetime v0_sweep:v0_sweep push_vs_pull:push_vs_pull; do
-        cp "$f/${pair%%:*}.png" "docs/studies/img/${pair##*:}.png"
+        cp "$f/${pair%%:*}.png" "$DOCS/studies/img/${pair##*:}.png"
     done
     # Fig. 7a's sigma_xy map nearest t = 67 l/c_r (the snapshot the page describes)
-    cp "$(ls "$f"/shear/map_sxy_t*.png | sort | tail -1)" docs/studies/img/shear_map_sxy_t67.png
+    cp "$(ls "$f"/shear/map_sxy_t*.png | sort | tail -1)" "$DOCS"/studies/img/shear_map_sxy_t67.png
     cat "$OUT/paper/claims.md" ;;
 scaling)
     "$MPIEXEC" -n "$NP" "$PY" -m parslip run run/shear_l500.toml --out "$OUT/shear_l500.vtkhdf" --overwrite --no-png
     "$PY" -m parslip figures "$OUT/shear_l500.vtkhdf" -o "$OUT/shear_l500_figures" --only spacetime
-    cp "$OUT/shear_l500_figures/spacetime.png" docs/hpc/shear_l500_spacetime.png
+    cp "$OUT/shear_l500_figures/spacetime.png" "$DOCS"/hpc/shear_l500_spacetime.png
     for t in 30 50; do
-        "$PY" -m parslip render "$OUT/shear_l500.vtkhdf" --field sxy --time $t -o "docs/hpc/shear_l500_sxy_t$t.png"
+        "$PY" -m parslip render "$OUT/shear_l500.vtkhdf" --field sxy --time $t -o "$DOCS/hpc/shear_l500_sxy_t$t.png"
     done
     "$PY" -m parslip fronts "$OUT/shear_l500.vtkhdf" ;;
 *)
