@@ -275,11 +275,12 @@ def test_a_point_killed_again_and_again_is_failed(here):
 
 
 def test_stop_after_stops_with_checkpoints_and_the_sweep_continues(here, capsys):
-    """p000 (about 4 s) stops at the deadline with a checkpoint, p001 does not start; run again, p000
-    continues from its checkpoint (not from the start) and p001 runs."""
-    text = ('base = "tiny.toml"\n[set]\n"drive.v0" = 0.002\n[zip]\n"drive.duration" = [1000.0, 2.0]\n')
+    """p000 (about 8 s here) stops at the deadline with a checkpoint, p001 does not start; run again, p000
+    continues from its checkpoint (not from the start) and p001 runs.  The deadline, 1.5 s, leaves a loaded
+    host time to plan before p000 starts, and p000 is long enough that a fast host does not finish it."""
+    text = ('base = "tiny.toml"\n[set]\n"drive.v0" = 0.002\n[zip]\n"drive.duration" = [2000.0, 2.0]\n')
     path = _write(here / "s.toml", text)
-    assert main(["sweep", path, "-o", "out", "--stop-after", "0.5"]) == 0
+    assert main(["sweep", path, "-o", "out", "--stop-after", "1.5"]) == 0
     cap = capsys.readouterr()
     assert "2 points: 0 ok, 0 failed, 2 pending (this job ran 1: 0 ok, 0 failed, 1 stopped)" in cap.out
     assert "continue with the same command" in cap.err

@@ -32,6 +32,7 @@ import uuid
 from dataclasses import dataclass, field
 
 from .. import hooks
+from ..parallel import collective
 from ..version import __version__
 from ..errors import ConfigError, RunError, WriteError
 
@@ -76,33 +77,11 @@ class _Ranks:
 
     def decide(self, fn):
         """Run ``fn`` on rank 0 and broadcast its value, or its ConfigError, to every rank."""
-        if self.comm is None:
-            return fn()
-        res = None
-        if self.rank == 0:
-            try:
-                res = ("ok", fn())
-            except ConfigError as e:
-                res = ("err", str(e))
-        res = self.comm.bcast(res, root=0)
-        if res[0] == "err":
-            raise ConfigError(res[1])
-        return res[1]
+        return collective.decide(self.comm, fn)
 
     def agree(self, fn):
         """Run ``fn`` on every rank; if it raised ConfigError on any, raise the lowest such rank's on all."""
-        try:
-            fn()
-            mine = None
-        except ConfigError as e:
-            mine = str(e)
-        if self.comm is None:
-            errors = [mine]
-        else:
-            errors = self.comm.allgather(mine)
-        for e in errors:
-            if e is not None:
-                raise ConfigError(e)
+        collective.agree(self.comm, fn)
 
     def sum(self, values):
         import numpy as np
@@ -150,7 +129,10 @@ def run_scene(scene, *, out=None, sets=None, restart=None, overwrite: bool = Fal
     """
     ranks = _Ranks(comm)
     try:
-        return _run(ranks, scene, out, sets, restart, overwrite, progress, stop_after, watchdog, command)
+        job = Job(ranks, scene, sets=sets, command=command)
+        if not job.prepare(out, restart, overwrite, progress, stop_after, watchdog):
+            return job.outcome()
+        return job.execute()
     except (ConfigError, RunError, KeyboardInterrupt):
         raise
     except Exception:
@@ -166,163 +148,254 @@ def run_scene(scene, *, out=None, sets=None, restart=None, overwrite: bool = Fal
         raise
 
 
-def _run(ranks, scene, out, sets, restart, overwrite, progress, stop_after, watchdog, command) -> Outcome:
-    from ..io import checkpoint as ck
-    from ..io.output import Output
-    from ..io.plan import default_out, plan_run
-    from ..io.writer_mode import writer_line
-    from ..scene import advice
-    from ..scene.derive import derive
-    from ..scene.load import load
-    from .control import CHECKPOINT, STOP, RunControl
-    from .monitor import Monitor
-    from .progress import Progress
-    from .simulation import Simulation
+class Job:
+    """One run on every rank of a communicator, in named steps, each collective:
 
-    t_start = time.monotonic()
-    rank, size = ranks.rank, ranks.size
-    hooks.check()
-    log = _logger(rank, size)
-    sc = ranks.decide(lambda: load(scene, sets))
+    prepare    the scene read and the files planned (rank 0 decides, every rank learns), the set-up
+               derived, room and memory checked, the state built fresh or restored from a checkpoint,
+               the output opened, the monitor and the run control made; False when the output is
+               already complete and there is nothing to do
+    execute    start the monitor, then ``loop`` and ``finish``; a failed run marks its output failed
+               and raises ``RunError`` on every rank; the monitor and the signals are always restored
+    loop       compile (timed apart), then advance until the end or an agreed stop, writing each
+               checkpoint the ranks agreed on (``checkpoint``)
+    finish     the end's checkpoint when checkpoints are on (to extend the run), the timings, the
+               output's status; then on rank 0 the XDMF sidecar and the summary lines
+    """
+
+    def __init__(self, ranks, scene, sets=None, command: str | None = None):
+        self.ranks, self.scene, self.sets, self.command = ranks, scene, sets, command
+        self.t_start = time.monotonic()
+        self.log = _logger(ranks.rank, ranks.size)
+        self.status = None                 # None while running or complete; else "checkpointed at step N", ...
+        self.timings = {}
+        self.have_checkpoint = False       # a checkpoint of this run exists to continue from
+        self.prog = self.monitor = self.control = self.writer = None
+
+    # ------------------------------------------------------------------ prepare --
+    def prepare(self, out, restart, overwrite, progress, stop_after, watchdog) -> bool:
+        """Everything before the first step; False when the output is complete already."""
+        from ..io.plan import plan_run
+        hooks.check()
+        ranks = self.ranks
+        self.sc = sc = ranks.decide(lambda: _load(self.scene, self.sets))
+        out = _output_path(self.scene, out)
+        plan = ranks.decide(lambda: plan_run(sc, out, restart=restart, overwrite=overwrite))
+        self.out, self.plan = plan.out, plan
+        if plan.action == "done":
+            self.log.info(f"{plan.out} is complete; nothing to do")
+            self.status = "complete"
+            return False
+        watchdog = sc["run.watchdog"] if watchdog is None else watchdog
+        if watchdog < 0:
+            raise ConfigError(f"--watchdog {watchdog!r}: accepted: seconds >= 0 (0 = off)")
+        self.st = st = self._setup()
+        self.sim = self._simulation()
+        self.run_id = plan.run_id or ranks.decide(lambda: uuid.uuid4().hex)
+        self._open_output()
+        self._announce()
+        self.prog = _progress(st, sc) if (ranks.rank == 0 and progress) else None
+        self._make_control(watchdog, stop_after)
+        return True
+
+    def _setup(self):
+        """The derived set-up, its omega_max computed once (rank 0, or the checkpoint's) for every rank."""
+        from ..scene.derive import derive
+        ranks, sc, plan = self.ranks, self.sc, self.plan
+        omega = plan.omega or ranks.decide(lambda: (lambda s: (s.omega_max, s.omega_method))(derive(sc)))
+        st = derive(sc, tuple(omega))
+        if not plan.checkpoint:
+            ranks.decide(lambda: _check_room(self.out, st))
+        ranks.agree(lambda: _check_memory(st, ranks.rank, ranks.size, ranks.comm))
+        return st
+
+    def _simulation(self):
+        """This rank's simulation, fresh or at the checkpoint's step (every rank reads the checkpoint,
+        which rank 0 validated when it planned the run)."""
+        from ..io import checkpoint as ck
+        from .simulation import Simulation
+        sc = self.sc
+        sim = Simulation(self.st, self.ranks.comm, buffer_frames=sc["output.buffer_frames"],
+                         buffer_events=sc["output.buffer_events"])   # ConfigError alike everywhere
+        self.ckpt_out = ck.path_for(self.out)
+        if self.plan.checkpoint:
+            sim.restore(*ck.read(self.plan.checkpoint))
+            self.have_checkpoint = os.path.abspath(self.plan.checkpoint) == os.path.abspath(self.ckpt_out)
+        self.n_start = sim.n
+        return sim
+
+    def _open_output(self):
+        from ..io.output import Output
+        from ..io.writer_mode import writer_line
+        prov = self.ranks.decide(lambda: _provenance(self.scene, self.command, self.run_id))
+        prov["parslip_version"] = __version__
+        self.writer = Output(self.out, self.sim.output_spec(), self.ranks.comm, prov,
+                             resume=self.run_id if self.plan.checkpoint else None)
+        self.log.info(writer_line(self.writer.mode))
+
+    def _announce(self):
+        """Rank 0's advice on the scene; every rank's line of what runs where."""
+        from ..scene import advice
+        st, log, size = self.st, self.log, self.ranks.size
+        for line in (advice.warnings(st) if self.ranks.rank == 0 else ()):
+            log.warning(line)
+        name = os.fspath(self.scene) if isinstance(self.scene, (str, os.PathLike)) else "scene"
+        log.info(f"{name}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
+                 f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {self.out}"
+                 + (f"; continuing from step {self.sim.n} ({self.plan.checkpoint})" if self.plan.checkpoint else ""))
+
+    def _make_control(self, watchdog, stop_after):
+        from .control import RunControl
+        from .monitor import Monitor
+        self.monitor = Monitor(self.sim, self.ranks.comm, progress=self.prog, watchdog_s=watchdog,
+                               on_fail=self._on_fail, log=self.log)
+        self.sim.monitor = self.monitor
+        self.control = RunControl(self.ranks.comm, self.st, stop_after=stop_after, started=self.t_start,
+                                  monitor=self.monitor)
+
+    def _on_fail(self, reason: str) -> str:
+        """The monitor is about to abort the job: mark the output failed where this rank can."""
+        out, more = self.out, (f"; continue from {self.ckpt_out}" if self.have_checkpoint else "")
+        if self.ranks.rank == 0 and self.writer.mode == "gather":
+            done = []
+            t = threading.Thread(target=lambda: done.append(self.writer.mark_failed(reason)), daemon=True)
+            t.start()
+            t.join(3.0)
+            if done and done[0]:
+                return f"{out} kept, status set to failed" + more
+        from ..io.postmortem import mark_failed_later
+        mark_failed_later(out, reason)
+        return f"{out} is marked failed once every rank has ended" + more
+
+    # ------------------------------------------------------------ execute --
+    def execute(self) -> Outcome:
+        """``loop`` and ``finish`` under the monitor; a failed run marks the output and raises on every rank."""
+        self.monitor.start()
+        try:
+            self.loop()
+            self.finish()
+        except RunError as e:
+            raise self._failed(e) from None
+        finally:
+            self.monitor.stop()
+            self.control.restore_signals()
+            if self.prog is not None:
+                self.prog.done()
+        outcome = self.outcome()
+        if self.ranks.rank == 0:
+            self._report(outcome)
+        return outcome
+
+    def loop(self):
+        """Compile, then advance to the end or to an agreed stop, writing the agreed checkpoints."""
+        from .control import CHECKPOINT, STOP
+        sim = self.sim
+        t_c = time.monotonic()
+        sim.compile()
+        self.timings["compile_s"] = time.monotonic() - t_c
+        self.monitor.compiled(sim.n)
+        self.t_loop = time.monotonic()
+        while True:
+            action = sim.run(self.writer, control=self.control)
+            if action is None:
+                break
+            self.checkpoint()
+            if action == CHECKPOINT:
+                self.log.info(f"checkpoint at step {sim.n} -> {self.ckpt_out}")
+                continue
+            self.status = f"{'checkpointed' if action == STOP else 'interrupted'} at step {sim.n}"
+            break
+        self.t_end, self.cpu_end = time.monotonic(), time.process_time()
+
+    def checkpoint(self):
+        """Write OUT.ckpt.h5 (collective), after the output holds everything it points past."""
+        from ..io import checkpoint as ck
+        self.monitor.phase("checkpoint")
+        self.writer.flush()                 # what the checkpoint points past is on disk first
+        attrs = self.sim.checkpoint_attrs()
+        attrs.update(scene=writer_toml(self.sc), run_id=self.run_id, output=os.path.abspath(self.out))
+        ck.write_collective(self.ranks.comm, self.ckpt_out, self.sim.checkpoint_parts(), attrs,
+                            self.st.lattice.n_nodes, self.st.lattice.n_top_sites)
+        self.have_checkpoint = True
+
+    def finish(self):
+        """The end's checkpoint (to extend the run with drive.duration), the timings and the status."""
+        sc = self.sc
+        if self.status is None and (sc["checkpoint.every"] or sc["checkpoint.wall"]):
+            self.checkpoint()
+        self.monitor.phase("finish")
+        self._timings()
+        self.writer.close(self.status or "complete")
+
+    def _timings(self):
+        sim, st, tm = self.sim, self.st, self.timings
+        steps = sim.n - self.n_start
+        loop_s = self.t_end - self.t_loop
+        tm.update(startup_s=self.t_loop - self.t_start - tm.get("compile_s", 0.0), loop_s=loop_s, steps=steps,
+                  node_updates_per_s=steps * st.lattice.n_nodes / max(loop_s, 1e-9))
+        if sim.drive_clock is not None:     # the drive alone: no start-up, no compilation, no settling
+            tm.update(drive_s=self.t_end - sim.drive_clock[0], drive_cpu_s=self.cpu_end - sim.drive_clock[1],
+                      drive_steps=sim.n - sim.drive_clock[2])
+        self.writer.set_timings(tm)
+
+    def _failed(self, e: RunError) -> RunError:
+        """A run that failed: its output marked failed (as far as the disk lets), the error to raise."""
+        msg = str(e)
+        if isinstance(e, WriteError):
+            msg += (f"; continue from the checkpoint {self.ckpt_out} with: "
+                    f"{continue_command(self.scene, self.sets, self.out, self.ckpt_out, self.ranks.size)}"
+                    if self.have_checkpoint else "; no checkpoint to continue from")
+        try:
+            self.writer.close(status=f"failed: {msg}")
+        except Exception:                   # noqa: BLE001 - the disk may be full: the message matters more
+            pass
+        return type(e)(msg)
+
+    # ------------------------------------------------------------ the end --
+    def outcome(self) -> Outcome:
+        """How the run ended, the same on every rank (the bond counters summed over the ranks)."""
+        if self.writer is None:            # nothing ran: the output was complete already
+            return Outcome("complete", self.out, size=self.ranks.size)
+        counts = self.ranks.sum(self.sim.counters)
+        return Outcome(self.status or "complete", self.out, self.ckpt_out if self.have_checkpoint else None,
+                       self.sim.n, (int(counts[0]), int(counts[1])), self.timings, self.ranks.size)
+
+    def _report(self, outcome: Outcome):
+        """Rank 0: the XDMF sidecar of a complete run with snapshots (no collective follows), the rates."""
+        log, tm = self.log, self.timings
+        if self.st.n_snapshots and self.status is None:
+            from ..io.xdmf import write_xdmf
+            try:
+                write_xdmf(self.out)
+            except OSError as e:
+                log.warning(f"the XDMF sidecar of {self.out} was not written ({e})")
+        steps, loop_s = self.sim.n - self.n_start, tm.get("loop_s", 0.0)
+        log.info(f"done in {loop_s:.1f} s: {steps / max(loop_s, 1e-9):,.0f} steps/s, "
+                 f"{tm.get('node_updates_per_s', 0) / 1e6:.1f} M node-updates/s on {self.ranks.size} rank(s); "
+                 f"{outcome.counters[0]} bond breaks, {outcome.counters[1]} re-formations")
+        if "drive_s" in tm:
+            log.info(f"drive phase {tm['drive_s']:.3f} s ({tm['drive_cpu_s']:.3f} s CPU): "
+                     f"{tm['drive_steps']} steps, {tm['drive_steps'] / max(tm['drive_s'], 1e-9):,.0f} steps/s")
+
+
+def _load(scene, sets):
+    from ..scene.load import load
+    return load(scene, sets)
+
+
+def _output_path(scene, out) -> str:
+    """``out``, or the default beside a scene file; a scene given as a mapping must name its output."""
+    from ..io.plan import default_out
     if out is None:
         if not isinstance(scene, (str, os.PathLike)):
             raise ConfigError("out = None: a scene given as a mapping needs an output path; accepted: out='FILE'")
         out = default_out(scene)
-    out = os.fspath(out)
-    plan = ranks.decide(lambda: plan_run(sc, out, restart=restart, overwrite=overwrite))
-    if plan.action == "done":
-        log.info(f"{plan.out} is complete; nothing to do")
-        return Outcome("complete", plan.out, size=size)
-    out = plan.out
-    if watchdog is None:
-        watchdog = sc["run.watchdog"]
-    if watchdog < 0:
-        raise ConfigError(f"--watchdog {watchdog!r}: accepted: seconds >= 0 (0 = off)")
-    omega = plan.omega or ranks.decide(lambda: (lambda s: (s.omega_max, s.omega_method))(derive(sc)))
-    st = derive(sc, tuple(omega))
-    if not plan.checkpoint:
-        ranks.decide(lambda: _check_room(out, st))
-    ranks.agree(lambda: _check_memory(st, rank, size, ranks.comm))
-    sim = Simulation(st, ranks.comm, buffer_frames=sc["output.buffer_frames"],
-                     buffer_events=sc["output.buffer_events"])   # ConfigError alike everywhere
-    run_id = plan.run_id or ranks.decide(lambda: uuid.uuid4().hex)
-    if plan.checkpoint:
-        sim._phase("restore")
-        arrays, attrs = ck.read(plan.checkpoint)        # every rank reads it, validated by rank 0 before
-        sim.restore(arrays, attrs)
-    prov = ranks.decide(lambda: _provenance(scene, command, run_id))
-    prov["parslip_version"] = __version__
-    writer = Output(out, sim, ranks.comm, prov, resume=run_id if plan.checkpoint else None)
-    log.info(writer_line(writer.mode))
-    for line in (advice.warnings(st) if rank == 0 else ()):
-        log.warning(line)
-    name = os.fspath(scene) if isinstance(scene, (str, os.PathLike)) else "scene"
-    log.info(f"{name}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
-             f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {out}"
-             + (f"; continuing from step {sim.n} ({plan.checkpoint})" if plan.checkpoint else ""))
-    prog = Progress(st, sc["output.progress_s"]) if (rank == 0 and progress) else None
-    ckpt_out = ck.path_for(out)
-    have_ckpt = [bool(plan.checkpoint and os.path.abspath(plan.checkpoint) == os.path.abspath(ckpt_out))]
+    return os.fspath(out)
 
-    def on_fail(reason: str) -> str:
-        """The monitor is about to abort the job: mark the output failed where this rank can."""
-        if rank == 0 and writer.mode == "gather":
-            done = []
-            t = threading.Thread(target=lambda: done.append(writer.mark_failed(reason)), daemon=True)
-            t.start()
-            t.join(3.0)
-            if done and done[0]:
-                return f"{out} kept, status set to failed" + (f"; continue from {ckpt_out}" if have_ckpt[0] else "")
-        from ..io.postmortem import mark_failed_later
-        mark_failed_later(out, reason)
-        return f"{out} is marked failed once every rank has ended" + \
-            (f"; continue from {ckpt_out}" if have_ckpt[0] else "")
 
-    monitor = Monitor(sim, ranks.comm, progress=prog, watchdog_s=watchdog, on_fail=on_fail, log=log)
-    sim.monitor = monitor
-    control = RunControl(ranks.comm, st, stop_after=stop_after, started=t_start, monitor=monitor)
-    scene_toml = writer_toml(sc)
-    n_start = sim.n
-    timings = {}
-
-    def checkpoint():
-        sim._phase("checkpoint")
-        writer.flush()                      # what the checkpoint points past is on disk first
-        attrs = sim.checkpoint_attrs()
-        attrs.update(scene=scene_toml, run_id=run_id, output=os.path.abspath(out))
-        ck.write_collective(ranks.comm, ckpt_out, sim.checkpoint_parts(), attrs, st.lattice.n_nodes,
-                            st.lattice.n_top_sites)
-        have_ckpt[0] = True
-
-    def finish_timings(t_loop, t_end, cpu_end):
-        steps = sim.n - n_start
-        timings.update(startup_s=t_loop - t_start - timings.get("compile_s", 0.0), loop_s=t_end - t_loop,
-                       steps=steps, node_updates_per_s=steps * st.lattice.n_nodes / max(t_end - t_loop, 1e-9))
-        if sim.drive_clock is not None:     # the drive alone: no start-up, no compilation, no settling
-            timings.update(drive_s=t_end - sim.drive_clock[0], drive_cpu_s=cpu_end - sim.drive_clock[1],
-                           drive_steps=sim.n - sim.drive_clock[2])
-        writer.set_timings(timings)
-
-    monitor.start()
-    status = None
-    try:
-        t_c = time.monotonic()
-        sim.compile()
-        timings["compile_s"] = time.monotonic() - t_c
-        monitor.compiled(sim.n)
-        t_loop = time.monotonic()
-        while True:
-            action = sim.run(writer, control=control)
-            if action is None:
-                break
-            checkpoint()
-            if action == CHECKPOINT:
-                log.info(f"checkpoint at step {sim.n} -> {ckpt_out}")
-                continue
-            status = f"{'checkpointed' if action == STOP else 'interrupted'} at step {sim.n}"
-            break
-        t_end, cpu_end = time.monotonic(), time.process_time()
-        if status is None and (sc["checkpoint.every"] or sc["checkpoint.wall"]):
-            checkpoint()                    # the end, to extend the run (drive.duration)
-        sim._phase("finish")
-        finish_timings(t_loop, t_end, cpu_end)
-        writer.close(status or "complete")
-    except RunError as e:
-        msg = str(e)
-        if isinstance(e, WriteError):
-            msg += (f"; continue from the checkpoint {ckpt_out} with: "
-                    f"{continue_command(scene, sets, out, ckpt_out, size)}" if have_ckpt[0]
-                    else "; no checkpoint to continue from")
-        try:
-            writer.close(status=f"failed: {msg}")
-        except Exception:                   # noqa: BLE001 - the disk may be full: the message matters more
-            pass
-        raise type(e)(msg) from None
-    finally:
-        monitor.stop()
-        control.restore_signals()
-        if prog is not None:
-            prog.done()
-    counts = ranks.sum(sim.counters)
-    outcome = Outcome(status or "complete", out, ckpt_out if have_ckpt[0] else None, sim.n,
-                      (int(counts[0]), int(counts[1])), timings, size)
-    if rank == 0:
-        if st.n_snapshots and status is None:
-            from ..io.xdmf import write_xdmf   # snapshots as a time series for any ParaView; no collective follows
-            try:
-                write_xdmf(out)
-            except OSError as e:
-                log.warning(f"the XDMF sidecar of {out} was not written ({e})")
-        steps = sim.n - n_start
-        loop_s = timings.get("loop_s", 0.0)
-        log.info(f"done in {loop_s:.1f} s: {steps / max(loop_s, 1e-9):,.0f} steps/s, "
-                 f"{timings.get('node_updates_per_s', 0) / 1e6:.1f} M node-updates/s on {size} rank(s); "
-                 f"{outcome.counters[0]} bond breaks, {outcome.counters[1]} re-formations")
-        if "drive_s" in timings:
-            log.info(f"drive phase {timings['drive_s']:.3f} s ({timings['drive_cpu_s']:.3f} s CPU): "
-                     f"{timings['drive_steps']} steps, {timings['drive_steps'] / max(timings['drive_s'], 1e-9):,.0f} "
-                     f"steps/s")
-    return outcome
+def _progress(st, sc):
+    from .progress import Progress
+    return Progress(st, sc["output.progress_s"])
 
 
 def _check_room(out: str, st) -> None:

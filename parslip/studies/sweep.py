@@ -67,6 +67,7 @@ import traceback
 from dataclasses import dataclass, field
 
 from ..errors import ConfigError, RunError
+from ..parallel import collective
 
 SECTIONS = ("base", "ranks_per_point", "set", "grid", "zip")
 DEFAULT_CHECKPOINT_WALL = 300.0      # s between a point's checkpoints unless the sweep sets a cadence
@@ -444,50 +445,23 @@ def run_sweep(path: str, outdir: str, comm=None, *, shard: tuple[int, int] = (0,
     points dealt to shard I of N (a job array task).  ``stop_after``: wall seconds after which no point
     starts and the running ones stop with a checkpoint.  ``reanalyse``: compute the finished points'
     observables again from their files (after a change to ``analysis``).  ``echo(line)`` reports progress
-    (rank 0 of each group); every rank must call this alike."""
-    from ..analysis.table import require_netcdf
+    (rank 0 of each group); every rank must call this alike.
+
+    The steps: rank 0 plans (reads the sweep, deals the points still to run to the groups of
+    ranks_per_point ranks) and every rank learns the plan; each group runs its points (``_run_group``);
+    the groups' counts are added up; rank 0 writes the summary."""
     rank = comm.Get_rank() if comm is not None else 0
     size = comm.Get_size() if comm is not None else 1
     echo = echo or (lambda line: print(line, file=sys.stderr, flush=True))
-    t_start = time.monotonic()
-    deadline = t_start + stop_after if stop_after is not None else None
+    deadline = time.monotonic() + stop_after if stop_after is not None else None
     si, sn = shard
     if not (isinstance(si, int) and isinstance(sn, int) and sn >= 1 and 0 <= si < sn):
         raise ConfigError(f"--shard {si}/{sn}: accepted: I/N with 0 <= I < N")
-
-    def decide(fn):
-        if comm is None or size == 1:
-            return fn()
-        res = None
-        if rank == 0:
-            try:
-                res = ("ok", fn())
-            except ConfigError as e:
-                res = ("err", str(e))
-        res = comm.bcast(res, root=0)
-        if res[0] == "err":
-            raise ConfigError(res[1])
-        return res[1]
-
-    def plan():
-        require_netcdf()
-        sw = load_sweep(path)
-        if size % sw.ranks_per_point:
-            raise ConfigError(f"{path}: ranks_per_point = {sw.ranks_per_point}: the job has {size} rank(s); "
-                              f"accepted: a rank count that is a multiple of ranks_per_point")
-        prepare(sw, outdir)
-        mine = {sw.points[i].name for i in deal([cost(sw, p) for p in sw.points], sn)[si]}
-        todo, notes = triage(sw, outdir, mine, retry_failed)
-        groups = size // sw.ranks_per_point
-        dealt = deal([cost(sw, p) for p in todo], groups)
-        return sw, [[todo[i].index for i in b] for b in dealt], notes, len(mine)
-
-    sw, dealt, notes, n_mine = decide(plan)
+    sw, dealt, notes, n_mine = collective.decide(comm, lambda: _plan(path, outdir, size, shard, retry_failed))
     rpp = sw.ranks_per_point
     groups = size // rpp
     g = rank // rpp
     sub = comm.Split(g, rank) if comm is not None and size > 1 else None
-    lead = (sub.Get_rank() if sub is not None else 0) == 0
     if rank == 0:
         for line in notes:
             echo(f"sweep: {line}")
@@ -496,19 +470,57 @@ def run_sweep(path: str, outdir: str, comm=None, *, shard: tuple[int, int] = (0,
              + (f", {n_mine} in shard {si}/{sn}" if sn > 1 else "")
              + f", {todo} to run on {size} rank(s) in {groups} group(s) of {rpp} -> {outdir}")
     res = SweepResult(outdir)
+    lead = _run_group(sw, [sw.points[i] for i in dealt[g]], outdir, sub, g, deadline, res, echo)
+    _wait_all(comm)
+    _add_up(comm, res, lead)
+    if rank == 0:
+        if reanalyse:
+            _reanalyse(sw, outdir, shard)
+        res.rows = summary_rows(sw, outdir)
+        res.summary = write_summary(sw, outdir, res.rows)
+    return res
+
+
+def _plan(path: str, outdir: str, size: int, shard: tuple[int, int], retry_failed: bool):
+    """Rank 0: the sweep, the indices of the points each group runs, notes on the points skipped, and
+    how many points this shard holds."""
+    from ..analysis.table import require_netcdf
+    require_netcdf()
+    sw = load_sweep(path)
+    if size % sw.ranks_per_point:
+        raise ConfigError(f"{path}: ranks_per_point = {sw.ranks_per_point}: the job has {size} rank(s); "
+                          f"accepted: a rank count that is a multiple of ranks_per_point")
+    prepare(sw, outdir)
+    mine = _shard_points(sw, shard)
+    todo, notes = triage(sw, outdir, mine, retry_failed)
+    groups = size // sw.ranks_per_point
+    dealt = deal([cost(sw, p) for p in todo], groups)
+    return sw, [[todo[i].index for i in b] for b in dealt], notes, len(mine)
+
+
+def _shard_points(sw, shard: tuple[int, int]) -> set:
+    """Names of the points dealt to shard I of N (longest first to the least loaded)."""
+    si, sn = shard
+    return {sw.points[i].name for i in deal([cost(sw, p) for p in sw.points], sn)[si]}
+
+
+def _run_group(sw, points, outdir: str, sub, g: int, deadline, res: SweepResult, echo) -> bool:
+    """Run this group's ``points`` one after the other, until they are done, a stop was asked for, or the
+    deadline passed (the group's ranks agree on stopping).  Counts into ``res``; True on the group's lead."""
+    lead = (sub.Get_rank() if sub is not None else 0) == 0
+    group = sub if sub is not None and sub.Get_size() > 1 else None
     stop = _Stop()
     try:
-        for idx in dealt[g]:
-            p = sw.points[idx]
+        for p in points:
             left = None if deadline is None else deadline - time.monotonic()
             halt = stop.flag or (left is not None and left <= 0)
-            if sub is not None and sub.Get_size() > 1:
-                halt = any(sub.allgather(halt))
+            if group is not None:
+                halt = any(group.allgather(halt))
             if halt:
                 break
             if lead:
                 write_record(outdir, p, dict(read_record(outdir, p) or {}, status="running"))
-            rec = run_point(sw, p, outdir, sub if sub is not None and sub.Get_size() > 1 else None, left)
+            rec = run_point(sw, p, outdir, group, left)
             res.ran += 1
             status = rec["status"]
             if lead:
@@ -524,23 +536,26 @@ def run_sweep(path: str, outdir: str, comm=None, *, shard: tuple[int, int] = (0,
                 break
     finally:
         stop.restore()
-    _wait_all(comm)
-    if comm is not None and size > 1:
-        # Each group's counts once (from its first rank), added up.
-        mine = [res.ran, res.ok, res.failed, res.stopped, int(res.interrupted)] if lead else [0] * 5
-        counts = [sum(c) for c in zip(*comm.allgather(mine))]
-        res.ran, res.ok, res.failed, res.stopped, res.interrupted = counts[:4] + [bool(counts[4])]
-    if rank == 0:
-        if reanalyse:
-            mine = {sw.points[i].name for i in deal([cost(sw, p) for p in sw.points], sn)[si]}
-            for p in sw.points:
-                rec = read_record(outdir, p)
-                if p.name in mine and rec and rec.get("status") == "ok":
-                    _finish_record(rec, out_path(outdir, p))
-                    write_record(outdir, p, rec)
-        res.rows = summary_rows(sw, outdir)
-        res.summary = write_summary(sw, outdir, res.rows)
-    return res
+    return lead
+
+
+def _add_up(comm, res: SweepResult, lead: bool) -> None:
+    """Each group's counts once (from its lead rank), added up on every rank."""
+    if comm is None or comm.Get_size() == 1:
+        return
+    mine = [res.ran, res.ok, res.failed, res.stopped, int(res.interrupted)] if lead else [0] * 5
+    counts = [sum(c) for c in zip(*comm.allgather(mine))]
+    res.ran, res.ok, res.failed, res.stopped, res.interrupted = counts[:4] + [bool(counts[4])]
+
+
+def _reanalyse(sw, outdir: str, shard: tuple[int, int]) -> None:
+    """Rank 0: the observables of this shard's finished points computed again from their files."""
+    mine = _shard_points(sw, shard)
+    for p in sw.points:
+        rec = read_record(outdir, p)
+        if p.name in mine and rec and rec.get("status") == "ok":
+            _finish_record(rec, out_path(outdir, p))
+            write_record(outdir, p, rec)
 
 
 def _describe(rec: dict) -> str:
