@@ -53,6 +53,7 @@ from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, NO_DOWN, NODES,
 from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
+from .kernels.scheme import ramp_share
 from .kernels.stencil import node_masked, row_edge, row_full
 
 # State: each block as [row, column] arrays, x and y apart, at two Verlet levels.
@@ -291,8 +292,7 @@ def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
         for r in range(d0.shape[0]):
             for j in range(d0.shape[1]):
                 d0[r, j] = cur.tx[r, j]
-    nr = prm.n_ramp
-    lf = 1.0 if nr == 0 else min(1.0, n / nr)
+    lf = ramp_share(n, prm.n_ramp)
     gy = like(lf * prm.fext, prm.cf)
     shift = like(prm.v0 * ((n + 1 - n_ds) * prm.dt), prm.cf)
     flags, tm = diag.flags, diag.timers

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels import reference as kernels
+from .kernels.scheme import ramp_share
 from ..errors import NonFiniteError
 from ..model.interface import REFORM_ZERO
 from ..model.lattice import DIRECTIONS, TOP
@@ -104,8 +105,7 @@ class Simulation:
 
     # -------------------------------------------------------------- phases --
     def load_factor(self, n: int) -> float:
-        st = self.setup
-        return 1.0 if st.n_ramp == 0 else min(1.0, n / st.n_ramp)
+        return ramp_share(n, self.setup.n_ramp)
 
     def step(self):
         """Advance the state from step n to n+1 (positions u(n) -> u(n+1))."""

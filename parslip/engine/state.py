@@ -17,6 +17,7 @@ from ..model.physics import DENSITY
 from ..parallel.layout import PAD
 from ..model.interface import BOND_ROWS, KX, KY, PARTNER, X0
 from .kernels import interface as ik
+from .kernels.scheme import verlet_constant
 from .loop import Drive, Levels
 
 
@@ -26,7 +27,7 @@ def stiffness_constants(kn: float, kt: float, dt: float, zeta: float) -> np.ndar
     from .kernels.stencil import K_A, K_B, K_C, K_DAMP, K_N, K_SIZE, K_T
     d = kn - kt
     c = 0.5 * zeta * dt
-    cf = dt * dt / (1.0 + c)
+    cf = verlet_constant(dt, zeta)
     k = np.zeros(K_SIZE)
     k[K_N], k[K_T], k[K_A] = cf * kn, cf * kt, cf * (d / 4 + kt)
     k[K_B], k[K_C], k[K_DAMP] = cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt), (1.0 - c) / (1.0 + c)

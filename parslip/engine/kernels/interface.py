@@ -149,50 +149,67 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
     ``reach[0]`` becomes the global column of the first OWNED top site whose bond or re-bonding
     window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
     """
-    g, p = it.geom, it.rules
-    bonds, taken, claim, counters, reach = it.bonds, it.taken, it.claim, it.counters, it.reach
-    ext_x, ext_y, exb_x, exb_y = it.ext_x, it.ext_y, it.exb_x, it.exb_y
-    tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
-    bbase, blo, bhi, bcols, w = g.bbase, g.blo, g.bhi, g.bcols, g.window
-    bown0, bown1 = g.bown0, g.bown1
-    ev, site0 = it.events, tbase - g.tfirst            # global site = local column + site0
-    d0 = p.delta0
-    d02 = p.rebond_length * p.rebond_length
-    w = _search_width(p.rebond, w)
-    zero = like(0, d0)
-    for i in range(blo, bhi):
-        taken[i] = 0
-    for i in range(bown0, bown1):
-        exb_x[i] = zero
-        exb_y[i] = zero
-    # 1. Breaks; the bonds that hold mark their substrate site taken and apply their force now (the
-    #    positions do not change within the step).  Free sites are listed in ``claim``.
+    zero = like(0, it.rules.delta0)
+    _clear(it, zero)
+    nfree = _breaks(n, tx, ty, bx, by, it, zero)
+    _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero)
+    _grants(n, nfree, tx, ty, bx, by, it, zero)
+
+
+@njit(cache=True, _nrt=False)
+def _clear(it, zero):
+    """No substrate site taken yet; no force on the OWNED bottom sites yet."""
+    g = it.geom
+    for i in range(g.blo, g.bhi):
+        it.taken[i] = 0
+    for i in range(g.bown0, g.bown1):
+        it.exb_x[i] = zero
+        it.exb_y[i] = zero
+
+
+@njit(cache=True, _nrt=False)
+def _breaks(n, tx, ty, bx, by, it, zero):
+    """1. Breaks; the bonds that hold mark their substrate site taken and apply their force now (the
+    positions do not change within the step).  The free sites are listed in ``claim``; returns how many."""
+    g, p, bonds, reach = it.geom, it.rules, it.bonds, it.reach
+    tbase, bbase, d0 = g.tbase, g.bbase, p.delta0
+    site0 = tbase - g.tfirst                          # global site = local column + site0
     nfree = 0
-    for j in range(tlo, thi):
+    for j in range(g.tlo, g.thi):
         q = _partner(bonds, j)
-        top_own = town0 <= j < town1
+        top_own = g.town0 <= j < g.town1
         if top_own:
-            ext_x[j] = zero
-            ext_y[j] = zero
+            it.ext_x[j] = zero
+            it.ext_y[j] = zero
         if q >= 0:
             i = q - bbase
-            if i < blo or i >= bhi:
+            if i < g.blo or i >= g.bhi:
                 if top_own and reach[0] < 0:
                     reach[0] = j + tbase
                 continue
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
             db = bonds[DELTA_B, j]
             if dx * dx + dy * dy < db * db:
-                taken[i] = 1
-                _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y)
+                it.taken[i] = 1
+                _apply(j, i, dx, dy, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
                 continue
             bonds[PARTNER, j] = -1
             if top_own:
-                counters[BREAKS] += 1
-                _event(ev, n, j + site0, BREAK, q)
-        claim[nfree] = j
+                it.counters[BREAKS] += 1
+                _event(it.events, n, j + site0, BREAK, q)
+        it.claim[nfree] = j
         nfree += 1
-    # 2. Claims of the free sites, kept in their slot m of ``claim`` (their site is claim_site[m]).
+    return nfree
+
+
+@njit(cache=True, _nrt=False)
+def _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero):
+    """2. Each free site's claim: the nearest untaken substrate site within the re-bond length, if the
+    healing rule lets it; kept with its site in its slot m of ``claim`` (site and claim in one integer)."""
+    g, p, bonds, claim, reach = it.geom, it.rules, it.bonds, it.claim, it.reach
+    tbase, bbase, thi, d0 = g.tbase, g.bbase, g.thi, p.delta0
+    d02 = p.rebond_length * p.rebond_length
+    w = _search_width(p.rebond, g.window)
     for m in range(nfree):
         j = claim[m]
         gl = j + tbase
@@ -200,14 +217,14 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
         best = np.inf
         got = -1
         for q in range(qc - w, qc + w + 1):
-            if q < 0 or q >= bcols:
+            if q < 0 or q >= g.bcols:
                 continue
             i = q - bbase
-            if i < blo or i >= bhi:
-                if town0 <= j < town1 and reach[0] < 0:
+            if i < g.blo or i >= g.bhi:
+                if g.town0 <= j < g.town1 and reach[0] < 0:
                     reach[0] = gl
                 continue
-            if taken[i]:
+            if it.taken[i]:
                 continue
             dx, dy = _gap(gl, q, tx, ty, bx, by, j, i, d0)
             d2 = dx * dx + dy * dy
@@ -217,25 +234,32 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
         if p.heal and not _heals(p, bonds, j, got + bbase if got >= 0 else -1,
                                  (tx[j] - tx_prev[j]) - (bx[got] - bx_prev[got]) if got >= 0 else zero):
             got = -1
-        claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j        # site and claim in one integer
-    # 3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once.
+        claim[m] = got * (thi + 1) + j if got >= 0 else -1 - j
+
+
+@njit(cache=True, _nrt=False)
+def _grants(n, nfree, tx, ty, bx, by, it, zero):
+    """3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once."""
+    g, p, bonds = it.geom, it.rules, it.bonds
+    tbase, bbase, thi, d0 = g.tbase, g.bbase, g.thi, p.delta0
+    site0 = tbase - g.tfirst
     for m in range(nfree):
-        c = claim[m]
+        c = it.claim[m]
         if c < 0:
             continue
         i, j = c // (thi + 1), c % (thi + 1)
-        if taken[i]:
+        if it.taken[i]:
             continue
-        taken[i] = 1
+        it.taken[i] = 1
         bonds[PARTNER, j] = i + bbase
         dx, dy = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)
         bonds[X0, j] = _rest_offset(p.reform, dx, zero)
         bonds[CLOCK, j] = 0
-        top_own = town0 <= j < town1
-        _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y)
+        top_own = g.town0 <= j < g.town1
+        _apply(j, i, dx, dy, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
         if top_own:
-            counters[FORMS] += 1
-            _event(ev, n, j + site0, FORM, i + bbase)
+            it.counters[FORMS] += 1
+            _event(it.events, n, j + site0, FORM, i + bbase)
 
 
 @njit(cache=True, inline="always", _nrt=False)
