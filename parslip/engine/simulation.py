@@ -23,6 +23,7 @@ from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
+from .kernels.scheme import ramp_share, verlet_constant
 from ..scene.memory import CHECK_EVERY, event_room, frame_buffer
 from .state import State
 
@@ -50,7 +51,7 @@ class Simulation:
         self.plan = build_plan(self.layout, self.dtype, self.comm)
         self.sched = L.Schedule(tasks=self.layout.tasks, ptr=task_ranges(self.layout.tasks))
         zeta = sc["time.zeta"]
-        cf = st.dt * st.dt / (1.0 + 0.5 * zeta * st.dt)
+        cf = verlet_constant(st.dt, zeta)
         self.params = L.Params(
             n_ramp=st.n_ramp, n_drive_start=st.n_drive_start,
             drive=0 if sc["drive.mode"] == "none" else (L.DRIVE_XY if sc["drive.hold"] == "xy" else L.DRIVE_X)
@@ -123,9 +124,7 @@ class Simulation:
 
     def load_factor(self, n: int | None = None) -> float:
         """min(1, n / n_ramp): the share of F_N acting at step n."""
-        n = self.n if n is None else n
-        st = self.setup
-        return 1.0 if st.n_ramp == 0 else min(1.0, n / st.n_ramp)
+        return ramp_share(self.n if n is None else n, self.setup.n_ramp)
 
     def energy(self, n: int | None = None, load: float | None = None) -> float:
         """Potential energy of this rank's part at step n (default: now), in m c^2."""
@@ -180,6 +179,17 @@ class Simulation:
             self.monitor.phase(name)
 
     # --------------------------------------------------------------- output --
+    def output_spec(self):
+        """What the writer (``io.output.Output``) needs of this run, as a frozen ``RunSpec``."""
+        from ..io.output import RunSpec
+        s, lat, lay = self.state, self.setup.lattice, self.layout
+        return RunSpec(setup=self.setup, rank=lay.rank, size=lay.size, col_range=tuple(lay.col_range),
+                       owned_sites=tuple(lay.owned_sites()) if lat.has_interface else (0, 0),
+                       node0=int(s.gid[0]) if s.n_owned else 0, site0=s.site0() if lat.has_interface else 0,
+                       driven_gid=s.driven_gid, frames_total=self.frames_total,
+                       snapshots_total=self.snapshots_total, buffer_frames=self.buffer_frames,
+                       events_written=self.events_written)
+
     @property
     def frames_total(self) -> int:
         """Interface frames in the output file once this run ends (earlier runs' frames included)."""
@@ -244,6 +254,7 @@ class Simulation:
         """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
 
         Every rank takes its OWNED part by global id, then halo exchanges fill the HALO copies."""
+        self._phase("restore")
         s, st = self.state, self.setup
         self.n = n = int(attrs["step"])
         for level, name in ((n, "u"), (n - 1, "u_prev")):

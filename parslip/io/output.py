@@ -16,6 +16,8 @@ import subprocess
 import sys
 import time
 
+from dataclasses import dataclass
+
 import h5py
 import numpy as np
 
@@ -93,6 +95,36 @@ def _early():
     return dcpl
 
 
+@dataclass(frozen=True)
+class RunSpec:
+    """What the writer needs of a run, handed over by the engine when it opens the output (the engine's
+    ``Simulation.output_spec``), so the writer reads no engine object.
+
+    setup             the derived set-up (``scene.derive.Setup``): lattice, scene, dt, frame and snapshot steps
+    rank, size        this rank and the rank count
+    col_range         (first, end) global columns of this rank's slab
+    owned_sites       (first, end) global interface sites this rank owns
+    node0, site0      the first OWNED global node id, and the first global site of this rank's interface record
+    driven_gid        global ids of this rank's driven nodes, in the order of its drive forces
+    frames_total      interface frames in the file once the run ends (an earlier run's included)
+    snapshots_total   snapshots in the file once the run ends
+    buffer_frames     frames the engine holds between flushes (the frame datasets' chunk rows)
+    events_written    bond events in the file already (a restart's)
+    """
+    setup: object
+    rank: int
+    size: int
+    col_range: tuple
+    owned_sites: tuple
+    node0: int
+    site0: int
+    driven_gid: np.ndarray
+    frames_total: int
+    snapshots_total: int
+    buffer_frames: int
+    events_written: int
+
+
 class Output:
     """Writes the contract above; every method is collective over the ranks.
 
@@ -102,26 +134,25 @@ class Output:
     the same call and none is left waiting in a collective.
     """
 
-    def __init__(self, path: str, sim, comm=None, provenance: dict | None = None, resume: str | None = None):
+    def __init__(self, path: str, spec: RunSpec, comm=None, provenance: dict | None = None,
+                 resume: str | None = None):
         """Create ``path`` for a new run, or with ``resume`` (the checkpoint's run id) reopen it to append."""
-        self.sim, self.comm, self.path = sim, comm, path
+        self.spec, self.comm, self.path = spec, comm, path
         self._handles = {}
         self._error = None                 # the first failed write on this rank: (what, OSError text)
         self._flushed = time.monotonic()   # rank 0's clock: when the file was last flushed
         self.frames_safe = 0               # frames on disk: frames_written at the last successful flush
         self._frames_set = 0               # frames_written as last set (on disk at the next flush)
-        st, lay, lat = sim.setup, sim.layout, sim.setup.lattice
-        self.rank = lay.rank
-        self.size = lay.size
+        st, lat = spec.setup, spec.setup.lattice
+        self.rank = spec.rank
+        self.size = spec.size
         self.mode = hdf5_mode(self.size, comm)
         self.root = self.rank == 0
         self.f = self._open(path, comm, "r+" if resume else "w")
 
         # My slices of the global arrays: OWNED nodes are a contiguous range of global ids.
-        state = sim.state
-        self.node0 = int(state.gid[0]) if state.n_owned else 0
-        self.site0 = state.site0() if lat.has_interface else 0
-        c0, c1 = lay.col_range
+        self.node0, self.site0 = spec.node0, spec.site0
+        c0, c1 = spec.col_range
         self.bulk_cells = _bulk_cells(lat, c0, c1)
         # The bulk cells' constant fields (not interface, intact), written with each snapshot.
         self._bulk_zeros = np.zeros(len(self.bulk_cells), np.uint8)
@@ -131,9 +162,9 @@ class Output:
         self.n_bulk_cells = int(sum(counts))
         self.n_nodes, self.n_sites = lat.n_nodes, lat.n_top_sites
         self.n_cells = self.n_bulk_cells + self.n_sites
-        lo, hi = lay.owned_sites() if lat.has_interface else (0, 0)
+        lo, hi = spec.owned_sites
         self.top_gid = lat.gid(TOP, 0, np.arange(lo, hi)).astype(np.int64)
-        self.driven_gid = sim.state.driven_gid
+        self.driven_gid = spec.driven_gid
         self.fn = float(st.scene["load.FN"])
         # A bond to a rigid substrate has no substrate node: drawn, like a broken bond, as a point-line.
         self.bottom_gid_of_site = ((lambda q: np.full(np.shape(q), -1, np.int64)) if lat.rigid else
@@ -144,10 +175,10 @@ class Output:
             self._resume(st, resume)
         else:
             self._write("(creating the datasets)", lambda: self._create(st, provenance or {}))
-        if self.sim.snapshots_total and st.scene["output.fields"] != "interface":
+        if self.spec.snapshots_total and st.scene["output.fields"] != "interface":
             old = self._old_snapshots if self.size == 1 or self.mode == "mpio" else \
                 self.comm.bcast(self._old_snapshots, root=0)
-            self._cell_constants(old, self.sim.snapshots_total)
+            self._cell_constants(old, self.spec.snapshots_total)
         try:
             self.flush()
         except WriteError:
@@ -257,7 +288,7 @@ class Output:
         f = self.f
         if f is None:
             return
-        nf, ns, N = self.sim.frames_total, self.n_sites, self.n_nodes
+        nf, ns, N = self.spec.frames_total, self.n_sites, self.n_nodes
         a = f.attrs
         a["scene"] = to_toml(st.scene)
         for k, v in prov.items():
@@ -286,7 +317,7 @@ class Output:
         g = self._handles["interface"] = f.create_group("interface")
         g.attrs["frame_every_steps"] = st.frame_every
         g.attrs["frames_written"] = 0
-        rows = max(1, min(max(nf, 1), self.sim.buffer_frames, MAX_FRAME_CHUNK_BYTES // (8 * max(ns, 1))))
+        rows = max(1, min(max(nf, 1), self.spec.buffer_frames, MAX_FRAME_CHUNK_BYTES // (8 * max(ns, 1))))
         for name, (dt_, per_frame, unit) in INTERFACE_DATASETS.items():
             if per_frame and ns == 0:     # a free block: no interface sites, nothing to grow
                 ds = g.create_dataset(name, shape=(nf, 0), dtype=dt_)
@@ -313,12 +344,12 @@ class Output:
             ds = ev.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dt_, chunks=(EVENT_CHUNK,))
             ds.attrs["units"] = unit
             self._handles[f"interface/{EVENTS}/{name}"] = ds
-        if self.sim.snapshots_total == 0 or st.scene["output.fields"] == "interface":
+        if self.spec.snapshots_total == 0 or st.scene["output.fields"] == "interface":
             return          # no snapshots asked for: no empty VTKHDF group either
         v = self._handles["VTKHDF"] = f.create_group("VTKHDF")
         v.attrs["Version"] = np.array([2, 2], np.int64)
         v.attrs["Type"] = np.bytes_(b"UnstructuredGrid")
-        S = self.sim.snapshots_total
+        S = self.spec.snapshots_total
         for name, shape in self._vtk_shapes(S).items():
             dt_ = np.uint8 if name in ("Types", "CellData/interface", "CellData/intact") else (
                 np.float64 if name.startswith(("Points", "PointData")) or name == "Steps/Values" else np.int64)
@@ -404,21 +435,21 @@ class Output:
         self._agree(err, f)
         if f is not None:
             g = f["interface"]
-            nf = self.sim.frames_total
+            nf = self.spec.frames_total
             for name, (_, per_frame, _) in INTERFACE_DATASETS.items():
                 if (per_frame and self.n_sites) or name in PER_FRAME_1D:
                     if name in g:
                         g[name].resize(nf, axis=0)
             if EVENTS in g:                  # events past the checkpoint's are written again from there
                 for name in EVENT_DATASETS:
-                    g[EVENTS][name].resize(self.sim.events_written, axis=0)
-                g[EVENTS].attrs["events_written"] = self.sim.events_written
+                    g[EVENTS][name].resize(self.spec.events_written, axis=0)
+                g[EVENTS].attrs["events_written"] = self.spec.events_written
             if "VTKHDF" in f:
                 old = self._old_snapshots = f["VTKHDF/NumberOfPoints"].shape[0]
-                for name, shape in self._vtk_shapes(self.sim.snapshots_total).items():
+                for name, shape in self._vtk_shapes(self.spec.snapshots_total).items():
                     if name != "Steps/Values":
                         f["VTKHDF"][name].resize(shape[0], axis=0)
-                self._step_constants(old, self.sim.snapshots_total)
+                self._step_constants(old, self.spec.snapshots_total)
             f.attrs["status"] = "running"
             f.attrs["scene"] = to_toml(st.scene)
             f.attrs["n_ranks"] = self.size
@@ -434,7 +465,7 @@ class Output:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         sums = self.forces(frames.fx[:count], frames.fdrive[:count])
         if self.root:
-            st = self.sim.setup
+            st = self.spec.setup
             steps = frames.step[:count] - st.n_drive_start
             loader = steps * st.dt * st.v0 / st.l if st.scene["drive.mode"] != "none" else np.zeros(count)
 

@@ -90,7 +90,7 @@ def main():
     sim.run(until=1)                          # loads (or compiles) the compiled loop
     t_first = time.perf_counter() - t
     tmp = comm.bcast(tempfile.mkdtemp(prefix="parslip-bench-") if rank == 0 else None)
-    out = Output(os.path.join(tmp, "bench.vtkhdf"), sim, comm)
+    out = Output(os.path.join(tmp, "bench.vtkhdf"), sim.output_spec(), comm)
     writer = _TimedWriter(out)
     n_nodes = st.lattice.n_nodes
     # Warm-up, and a step count for the requested time (agreed by all ranks).
