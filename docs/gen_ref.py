@@ -9,12 +9,22 @@ no file of ``docs/``:
                               builds, found by walking its subparsers (a new
                               subcommand, nested ones included, appears by itself)
   reference/output-format.md  the run file's datasets, from ``parslip.io.contract``
-  reference/python-api.md     ``parslip.run``, ``parslip.open``, the ``Run`` object, ``Outcome`` and the
-                              errors, from their docstrings
 
+and the files the site needs that git does not hold:
+
+  model/scene.png             the model picture, drawn by ``parslip.analysis.scene_picture`` from the
+                              lattice of a small scene (``DOCS_SCENE``)
+  examples/tour.ipynb         the tour notebook (``examples/tour.ipynb``), which mkdocs-jupyter executes
+                              and renders with its outputs
+  javascripts/mathjax/        MathJax 3 (npm package ``mathjax``, version ``MATHJAX_VERSION``): its
+                              ``tex-mml-chtml.js``, CHTML fonts and TeX extensions, from
+                              ``.cache/mathjax`` (``tests/install.sh`` installs it there; the hook runs npm
+                              itself when it is missing), so pages typeset with no network
+
+The Python API reference (``docs/reference/python-api.md``) is mkdocstrings' work, from the docstrings.
 The parslip documented is the one in this checkout (the repository root is put
-first on ``sys.path``).  It imports the schema, the command-line parser module,
-the output contract and the API's modules only: none of them starts MPI or compiles with numba
+first on ``sys.path``).  The reference pages import the schema, the command-line parser module and
+the output contract only: none of them starts MPI or compiles with numba
 (``tests/test_docs.py`` checks that).  Each ``*_page()`` function returns the
 Markdown of one page and can be called without MkDocs.
 """
@@ -27,6 +37,9 @@ import inspect
 import json
 import os
 import pathlib
+import re
+import shutil
+import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -260,53 +273,78 @@ def output_format_page() -> str:
     return "\n".join(out)
 
 
-# --- Python API -----------------------------------------------------------------------------------
-
-def python_api_page() -> str:
-    import parslip
-    from parslip import errors
-    from parslip.analysis import results
-    from parslip.engine import runner
-
-    out = ["# Python API", "",
-           GENERATED_NOTE.format(source="the docstrings of `parslip/__init__.py`, `parslip/analysis/results.py`, "
-                                        "`parslip/engine/runner.py`, `parslip/errors.py`"),
-           "How to use it: [Python and notebooks](../guide/python.md).", ""]
-    for name in ("run", "open"):
-        f = getattr(parslip, name)
-        out += [f"## `parslip.{name}{inspect.signature(f)}`", "", "```text", inspect.getdoc(f) or "", "```", ""]
-    out += ["## `Run`: what `parslip.run` and `parslip.open` return", "", "```text",
-            inspect.getdoc(results.Run) or "", "```", "", "| member | what it is |", "| --- | --- |"]
-    for n, m in inspect.getmembers(results.Run):
-        if n.startswith("_"):
-            continue
-        doc = inspect.getdoc(m.fget if isinstance(m, property) else getattr(m, "func", m)) or ""
-        kind = "property" if isinstance(m, (property, )) or type(m).__name__ == "cached_property" else "method"
-        sig = "" if kind == "property" else str(inspect.signature(m))
-        out.append(f"| `{n}{sig}` | {_cell(doc.split(chr(10) + chr(10))[0])} |")
-    out += ["", "## `Outcome`: how a run ended (`Run.outcome`)", "", "```text",
-            inspect.getdoc(runner.Outcome) or "", "```", "", "| field | default |", "| --- | --- |"]
-    for fld in runner.Outcome.__dataclass_fields__.values():
-        out.append(f"| `{fld.name}` | {_cell(repr(fld.default) if not callable(fld.default_factory) else '{}')} |")
-    out += ["", "## Errors", "", "| exception | base | exit code on the command line | what it means |",
-            "| --- | --- | --- | --- |"]
-    for n, c in inspect.getmembers(errors, inspect.isclass):
-        if issubclass(c, Exception) and c.__module__ == errors.__name__:
-            code = getattr(c, "exit_code", "")
-            out.append(f"| `{n}` | `{c.__bases__[0].__name__}` | {code} | {_cell((inspect.getdoc(c) or '').split(chr(10))[0])} |")
-    return "\n".join(out) + "\n"
-
-
 PAGES = {
     "reference/keys.md": keys_page,
     "reference/cli.md": cli_page,
     "reference/output-format.md": output_format_page,
-    "reference/python-api.md": python_api_page,
 }
+
+
+# --- MathJax, vendored ---------------------------------------------------------------------------
+
+MATHJAX_VERSION = "3.2.2"
+MATHJAX_PREFIX = ROOT / ".cache" / "mathjax"                 # npm install --prefix; git ignores .cache/
+MATHJAX_ES5 = MATHJAX_PREFIX / "node_modules" / "mathjax" / "es5"
+MATHJAX_DEST = "javascripts/mathjax"                         # in the site, beside mathjax-config.js
+
+
+def ensure_mathjax() -> pathlib.Path:
+    """The es5 directory of the npm package mathjax@MATHJAX_VERSION in .cache/mathjax, installed with npm
+    when missing (as ``tests/install.sh`` does); a clear error when that cannot be done."""
+    def version():
+        try:
+            return json.loads((MATHJAX_ES5.parent / "package.json").read_text())["version"]
+        except (OSError, ValueError, KeyError):
+            return None
+    if version() != MATHJAX_VERSION:
+        npm = shutil.which("npm")
+        if npm is None:
+            raise RuntimeError(f"MathJax {MATHJAX_VERSION} is not in {MATHJAX_PREFIX} and npm is missing: install "
+                               "Node.js and npm, then run `bash tests/install.sh` (or `npm install --prefix "
+                               f".cache/mathjax --no-save mathjax@{MATHJAX_VERSION}`)")
+        MATHJAX_PREFIX.mkdir(parents=True, exist_ok=True)
+        r = subprocess.run([npm, "install", "--prefix", str(MATHJAX_PREFIX), "--no-save", "--no-audit", "--no-fund",
+                            "--loglevel=error", f"mathjax@{MATHJAX_VERSION}"], capture_output=True, text=True,
+                           timeout=600)
+        if r.returncode != 0 or version() != MATHJAX_VERSION:
+            raise RuntimeError(f"npm install mathjax@{MATHJAX_VERSION} into {MATHJAX_PREFIX} failed: "
+                               + (r.stderr or r.stdout).strip()[-500:])
+    return MATHJAX_ES5
+
+
+def mathjax_files() -> list[tuple[pathlib.Path, str]]:
+    """(source, path in the site) of what the pages load: the combined component, the CHTML fonts and the
+    TeX extensions MathJax's autoload may fetch (\\boldsymbol, \\cancel, ...)."""
+    es5 = ensure_mathjax()
+    out = [(es5 / "tex-mml-chtml.js", f"{MATHJAX_DEST}/tex-mml-chtml.js")]
+    for sub in ("output/chtml/fonts/woff-v2", "input/tex/extensions"):
+        for f in sorted((es5 / sub).rglob("*")):
+            if f.is_file():
+                out.append((f, f"{MATHJAX_DEST}/{f.relative_to(es5).as_posix()}"))
+    return out
+
+
+# --- the model picture and the notebook -------------------------------------------------------------
+
+MODEL_PICTURE = "model/scene.png"
+NOTEBOOKS = {"examples/tour.ipynb": ROOT / "examples" / "tour.ipynb"}
+
+
+def model_picture() -> bytes:
+    from parslip.analysis.scene_picture import DOCS_SCENE, scene_png
+    return scene_png(DOCS_SCENE)
 
 
 # --- the MkDocs hook --------------------------------------------------------------------------------
 
+try:
+    from mkdocs.plugins import event_priority
+except ImportError:                         # the page functions above work without MkDocs
+    def event_priority(priority):
+        return lambda f: f
+
+
+@event_priority(100)                        # before mkdocs-jupyter's on_files, which must see the notebook
 def on_files(files, config):
     from mkdocs.exceptions import PluginError
     from mkdocs.structure.files import File
@@ -315,4 +353,24 @@ def on_files(files, config):
         if files.get_file_from_path(uri) is not None:
             raise PluginError(f"docs/{uri} is generated by docs/gen_ref.py: remove the file from docs/")
         files.append(File.generated(config, uri, content=make()))
+    files.append(File.generated(config, MODEL_PICTURE, content=model_picture()))
+    for uri, src in NOTEBOOKS.items():        # a File with a source directory, which mkdocs-jupyter can wrap
+        files.append(File(uri, src_dir=str(src.parents[uri.count("/")]), dest_dir=config["site_dir"],
+                          use_directory_urls=config["use_directory_urls"]))
+    try:
+        vendored = mathjax_files()
+    except RuntimeError as e:
+        raise PluginError(str(e)) from None
+    for src, uri in vendored:
+        files.append(File.generated(config, uri, abs_src_path=str(src)))
     return files
+
+
+_NBCONVERT_MATHJAX = re.compile(r"<!-- Load mathjax -->.*?<!-- End of mathjax configuration -->", re.S)
+
+
+def on_page_content(html, page, config, files):
+    """A notebook page brings nbconvert's MathJax 2 from a CDN: drop it, the site's vendored MathJax 3 typesets."""
+    if page.file.src_uri.endswith(".ipynb"):
+        html = _NBCONVERT_MATHJAX.sub("", html)
+    return html

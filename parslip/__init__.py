@@ -18,28 +18,33 @@ def run(scene, *, out, sets=None, restart=None, overwrite=False, comm=None, prog
         watchdog=None):
     """Run a scene and return its results, the object ``parslip.open(out)`` returns.
 
-    Parameters (units as in the scene keys: ``parslip keys``):
-      scene       a TOML scene file path, or a mapping of scene keys (flat ``{"drive.v0": 1e-3}`` or nested)
-      out         the output file (.vtkhdf); it must not exist unless ``overwrite`` or ``restart``
-      sets        overrides: ``{"drive.v0": 1e-2}`` or ``["drive.v0=1e-2"]`` (TOML literals, as ``--set``)
-      restart     None; a checkpoint path (``OUT.ckpt.h5``) to continue from; or "auto" (continue when a
-                  checkpoint exists and the run is not complete, do nothing when it is complete)
-      overwrite   replace an existing output file
-      comm        an mpi4py communicator to run on (every rank of it calls ``run``); None: this process
-                  alone, and no MPI library is loaded
-      progress    log progress lines on rank 0 (logger "parslip"; lines carry rank/size)
-      stop_after  wall-clock seconds after which the run writes a checkpoint and stops
-      watchdog    seconds without an agreement of the ranks before the job is aborted (default: the
-                  scene's run.watchdog, 180 s; 0 = off)
+    Units are those of the scene keys (``parslip keys``).  The datasets written are those of ``parslip run``,
+    bit for bit.
 
-    Returns ``parslip.analysis.results.Run`` with ``.outcome`` (``engine.runner.Outcome``): its
-    ``status`` is "complete", "checkpointed at step N" (SIGTERM/SIGUSR1 or stop_after) or "interrupted
-    at step N" (Ctrl-C); a checkpoint continues either.
+    Args:
+        scene: a TOML scene file path, or a mapping of scene keys (flat ``{"drive.v0": 1e-3}`` or nested).
+        out: the output file (.vtkhdf); it must not exist unless ``overwrite`` or ``restart``.
+        sets: overrides: ``{"drive.v0": 1e-2}`` or ``["drive.v0=1e-2"]`` (TOML literals, as ``--set``).
+        restart: None; a checkpoint path (``OUT.ckpt.h5``) to continue from; or "auto" (continue when a
+            checkpoint exists and the run is not complete, do nothing when it is complete).
+        overwrite: replace an existing output file.
+        comm: an mpi4py communicator to run on (every rank of it calls ``run``); None: this process
+            alone, and no MPI library is loaded.
+        progress: log progress lines on rank 0 (logger "parslip"; lines carry rank/size).
+        stop_after: wall-clock seconds after which the run writes a checkpoint and stops.
+        watchdog: seconds without an agreement of the ranks before the job is aborted (default: the
+            scene's run.watchdog, 180 s; 0 = off).
 
-    Raises ``ConfigError`` for bad input (a key, a value, a path: the message names it and what is
-    accepted; the command line exits 2) and ``RunError`` for a run that failed on the way (non-finite
-    state, slip beyond the halo, a failed write: the message gives the step and place; the command line
-    exits 3), on every rank alike.  The datasets written are those of ``parslip run``, bit for bit.
+    Returns:
+        Run: ``parslip.analysis.results.Run`` with ``.outcome`` (``engine.runner.Outcome``): its ``status``
+            is "complete", "checkpointed at step N" (SIGTERM/SIGUSR1 or stop_after) or "interrupted at
+            step N" (Ctrl-C); a checkpoint continues either.
+
+    Raises:
+        ConfigError: bad input (a key, a value, a path: the message names it and what is accepted; the
+            command line exits 2), on every rank alike.
+        RunError: a run that failed on the way (non-finite state, slip beyond the halo, a failed write: the
+            message gives the step and place; the command line exits 3), on every rank alike.
     """
     from .analysis.results import Run
     from .engine.runner import run_scene

@@ -55,3 +55,27 @@ def long_scene(tmp_path):
     sc = tmp_path / "long.toml"
     sc.write_text(small_toml(**LONG))
     return sc
+
+
+@pytest.fixture(scope="session")
+def docs_site(tmp_path_factory):
+    """The documentation site, built once per session with ``mkdocs build --strict`` (tests/test_docs.py and
+    tests/test_site.py read it); the build fails the test with its output on any warning."""
+    import pathlib
+    import re
+    import subprocess
+    import sys
+
+    root = pathlib.Path(__file__).resolve().parent.parent
+    out = tmp_path_factory.mktemp("site")
+    try:
+        import mkdocs  # noqa: F401
+    except ImportError:
+        pytest.fail('mkdocs is not installed: python -m pip install -e ".[docs]" (tests/install.sh does)')
+    r = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--config-file",
+                        str(root / "mkdocs.yml"), "--site-dir", str(out)],
+                       cwd=root, capture_output=True, text=True, timeout=600)
+    log = r.stdout + r.stderr
+    warnings = [line for line in log.splitlines() if re.search(r"\bWARNING\b|Warning:", line)]
+    assert r.returncode == 0 and not warnings, f"mkdocs build --strict failed (exit {r.returncode}):\n{log}"
+    return out

@@ -73,6 +73,46 @@ install_mpio() {
     fi
 }
 
+# --- The docs site's MathJax 3 and the browser its test reads the site with --------------------------
+# MathJax: the npm package, pinned in docs/gen_ref.py (MATHJAX_VERSION), into .cache/mathjax (git ignores
+# it); the docs build copies it into the site (the hook installs it itself when it is missing).  Chromium:
+# Debian's, for tests/test_site.py, which opens the built pages from disk with no network; without apt-get
+# that test skips and says why.
+install_mathjax() {
+    local version
+    version=$(sed -n 's/^MATHJAX_VERSION = "\(.*\)"$/\1/p' docs/gen_ref.py)
+    if [ -f .cache/mathjax/node_modules/mathjax/package.json ] \
+        && grep -q "\"version\": \"$version\"" .cache/mathjax/node_modules/mathjax/package.json; then
+        return 0
+    fi
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "tests/install.sh: no npm here; install Node.js and npm, or the docs build cannot vendor MathJax" >&2
+        return 0
+    fi
+    mkdir -p .cache/mathjax
+    npm install --prefix .cache/mathjax --no-save --no-audit --no-fund --loglevel=error "mathjax@$version" >/dev/null
+}
+
+install_chromium() {
+    if command -v chromium >/dev/null 2>&1; then
+        return 0
+    fi
+    if ! command -v apt-get >/dev/null 2>&1; then
+        echo "tests/install.sh: no apt-get here; install Chromium (chromium on PATH), or tests/test_site.py skips" >&2
+        return 0
+    fi
+    local sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        sudo="sudo -n"
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq -o DPkg::Lock::Timeout=900 --no-install-recommends chromium >/dev/null
+    command -v chromium >/dev/null
+}
+
 install_python
 install_paraview
 install_mpio
+install_mathjax
+install_chromium

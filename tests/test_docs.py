@@ -23,20 +23,9 @@ WARNING = re.compile(r"\bWARNING\b|Warning:")
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory) -> pathlib.Path:
-    """The site, built once for this module; the test fails with the build's output on any warning."""
-    out = tmp_path_factory.mktemp("site")
-    try:
-        import mkdocs  # noqa: F401
-    except ImportError:
-        pytest.fail('mkdocs is not installed: python -m pip install -e ".[docs]" (tests/install.sh does)')
-    r = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--config-file",
-                        str(ROOT / "mkdocs.yml"), "--site-dir", str(out)],
-                       cwd=ROOT, capture_output=True, text=True, timeout=300)
-    log = r.stdout + r.stderr
-    warnings = [line for line in log.splitlines() if WARNING.search(line)]
-    assert r.returncode == 0 and not warnings, f"mkdocs build --strict failed (exit {r.returncode}):\n{log}"
-    return out
+def site(docs_site) -> pathlib.Path:
+    """The site, built once per session (``docs_site`` in conftest.py, shared with tests/test_site.py)."""
+    return docs_site
 
 
 def _page(site: pathlib.Path, name: str) -> str:

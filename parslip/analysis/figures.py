@@ -29,8 +29,13 @@ SLIP_POINTS = (0.0, 0.35, 0.98)           # x/l of the slip records (Fig. 10, ap
 
 
 def pyplot():
+    """matplotlib.pyplot on the Agg backend (no window), except in a Jupyter kernel with its inline backend,
+    where figures then show below the cell that draws them."""
+    import sys
+
     import matplotlib
-    matplotlib.use("Agg")
+    if not ("ipykernel" in sys.modules and "inline" in os.environ.get("MPLBACKEND", "")):
+        matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
 

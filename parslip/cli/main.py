@@ -29,7 +29,7 @@ output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
 # which adds its parser with ``set_defaults(func=...)``; ``func(args)`` returns
 # the exit code.  Their heavy imports stay inside ``func``.
 COMMAND_MODULES = ("parslip.cli.analysis_cmds", "parslip.cli.viz_cmds", "parslip.cli.bench_cmds",
-                   "parslip.cli.paper_cmds", "parslip.cli.sweep_cmds")
+                   "parslip.cli.paper_cmds", "parslip.cli.sweep_cmds", "parslip.cli.draw_cmds")
 
 
 def _parser() -> argparse.ArgumentParser:
