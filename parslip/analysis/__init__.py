@@ -1,6 +1,7 @@
 """Reading runs back: rupture fronts, friction observables (static peak, precursors), results object,
 figures, a sweep's summary table and its maps, paper comparison, accuracy.  Never imports the engine."""
-from .fronts import Front, break_events, first_break, fronts, load_interface, summary  # noqa: F401
+from .fronts import Front, break_events, first_break, fronts, load_interface  # noqa: F401
+from .friction import summary  # noqa: F401
 
 
 def spacetime_png(iface: dict, png: str, title: str = "") -> bool:

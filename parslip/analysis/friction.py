@@ -70,7 +70,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fronts import Front, first_break, fronts as front_catalogue
+from .fronts import MAX_GAP, Front, first_break, fronts as front_catalogue, table
 
 EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one site) of an edge has reached it
 
@@ -178,7 +178,7 @@ def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
                       float(force))
 
 
-def fate(front: Front, iface: dict, max_gap: float = 3.0) -> str:
+def fate(front: Front, iface: dict, max_gap: float = MAX_GAP) -> str:
     """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring)."""
     x, t = iface["x"], iface["t"]
     ns = len(x)
@@ -208,7 +208,7 @@ def fate(front: Front, iface: dict, max_gap: float = 3.0) -> str:
     return "running" if float(t[-1]) - front.t_end <= max_gap else "arrested"
 
 
-def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = 3.0) -> list[Precursor]:
+def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = MAX_GAP) -> list[Precursor]:
     """Every front that arrested inside the contact, with its arrest time, site and length."""
     fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
     ns = len(iface["x"])
@@ -222,7 +222,7 @@ def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = 3.0)
 
 
 def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
-                max_gap: float = 3.0) -> dict:
+                max_gap: float = MAX_GAP) -> dict:
     """One flat row of friction and front observables (the columns of a sweep's summary table).
 
     Keys and units: first_break_time (l/c_r), first_break_x (l), mu_first_break, mu_s, mu_s_time (l/c_r),
@@ -288,7 +288,7 @@ UNITS = {"first_break_time": "l/c_r", "first_break_x": "l", "mu_first_break": "-
 
 
 def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
-                  max_gap: float = 3.0) -> list[str]:
+                  max_gap: float = MAX_GAP) -> list[str]:
     """The friction part of a run's report: static peak, slip onset, precursors."""
     pk = static_peak(iface, fn)
     if not math.isfinite(pk.mu_s):
@@ -307,3 +307,22 @@ def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None =
     else:
         lines.append("no precursors (no front arrested inside the contact)")
     return lines
+
+
+def summary(iface: dict, fn: float | None = None) -> str:
+    """First break, the front catalogue with each front's fate, and the friction record (static peak,
+    slip onset, precursors), as ``parslip run`` prints it; ``fn`` is F_N."""
+    tb, xb = first_break(iface)
+    lines = []
+    if tb is None:
+        lines.append("no bond broke")
+    else:
+        lines.append(f"first break at t = {tb:.3f} l/c_r, x/l = {', '.join(f'{v:.3f}' for v in xb[:6])}")
+    fr = front_catalogue(iface)
+    lines.append(f"{len(fr)} rupture fronts")
+    if fr:
+        arrest = {p.index: p.arrest_length for p in precursors(iface, fr)}
+        lines.append(table(fr[:12], [fate(f, iface) for f in fr[:12]], arrest))
+    if "mu" in iface and len(iface["x"]):
+        lines += summary_lines(iface, fn, fr)
+    return "\n".join(lines)

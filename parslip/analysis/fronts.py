@@ -17,6 +17,10 @@ import numpy as np
 
 from ..io.contract import read_interface
 
+# l/c_r: the longest pause of a tip whose bond re-attached before it moved on, for its front to stay one
+# front (the detector's patience); the default of every function that groups breaks into fronts.
+MAX_GAP = 3.0
+
 
 def load_interface(path: str) -> dict:
     """The interface record (``io.contract.read_interface``): x, t, intact, partner, ux, uy, sxy, syy."""
@@ -173,7 +177,7 @@ class _Chain:
         self.d, self.last = side, k
 
 
-def chains(iface: dict, max_gap: float = 3.0) -> list[_Chain]:
+def chains(iface: dict, max_gap: float = MAX_GAP) -> list[_Chain]:
     """Break events grouped into fronts, frame by frame.
 
     In each frame the newly broken sites form contiguous runs.  A run that
@@ -318,7 +322,7 @@ def _slip_windows(kept: list[_Chain], nf: int) -> dict:
     return out
 
 
-def fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5, window: int = 2) -> list[Front]:
+def fronts(iface: dict, max_gap: float = MAX_GAP, min_sites: int = 5, window: int = 2) -> list[Front]:
     """Every rupture front that broke at least ``min_sites`` bonds, in order of nucleation.
 
     ``max_gap`` (l/c_r): longest pause of a tip whose bond re-attached before it
@@ -376,26 +380,6 @@ def resolution_lines(fr: list[Front]) -> list[str]:
                            f"{b['x'][1]:.3f}), t = {b['t'][0]:.4f}-{b['t'][1]:.4f} l/c_r, {b['n_sites']} sites in "
                            f"{b['n_steps']} steps{speed}")
     return out
-
-
-def summary(iface: dict, fn: float | None = None) -> str:
-    """First break, the front catalogue with each front's fate, and the friction record (static peak,
-    slip onset, precursors: ``analysis.friction``), as ``parslip run`` prints it; ``fn`` is F_N."""
-    from .friction import fate, precursors, summary_lines
-    tb, xb = first_break(iface)
-    lines = []
-    if tb is None:
-        lines.append("no bond broke")
-    else:
-        lines.append(f"first break at t = {tb:.3f} l/c_r, x/l = {', '.join(f'{v:.3f}' for v in xb[:6])}")
-    fr = fronts(iface)
-    lines.append(f"{len(fr)} rupture fronts")
-    if fr:
-        arrest = {p.index: p.arrest_length for p in precursors(iface, fr)}
-        lines.append(table(fr[:12], [fate(f, iface) for f in fr[:12]], arrest))
-    if "mu" in iface and len(iface["x"]):
-        lines += summary_lines(iface, fn, fr)
-    return "\n".join(lines)
 
 
 # --- Fronts from the exact event record ------------------------------------------------------------
@@ -555,7 +539,7 @@ def _event_front(c: _Chain, iface: dict, h: int, t_of: dict, widths: dict, windo
                  supershear=supershear, bursts=bursts)
 
 
-def event_fronts(iface: dict, max_gap: float = 3.0, min_sites: int = 5, window: int = 2) -> list[Front]:
+def event_fronts(iface: dict, max_gap: float = MAX_GAP, min_sites: int = 5, window: int = 2) -> list[Front]:
     """``fronts`` from the exact event record ``iface["events"]``: arrival times resolved to dt.
 
     Local speeds are fitted over 2 ``window`` + 1 sites.  A fit above the top block's c_l is no speed: the

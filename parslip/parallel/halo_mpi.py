@@ -23,7 +23,7 @@ from numba import njit
 from ..model.interface import N_TRAVEL
 from ..model.lattice import BOTTOM
 from . import mpi
-from .exchange import SEGMENT, SITES, Plan
+from .plans import SEGMENT, SITES, Plan
 
 TAG = 7
 

@@ -1,0 +1,21 @@
+"""The exchange plans' types, apart from the code that builds or runs them.
+
+``exchange`` dispatches on them and ``halo_mpi`` builds the MPI one; both import this module, which
+loads no MPI: numba's cache index names the types of every compiled version of the loop, and reading
+that index must not import the module that loads MPI.
+"""
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+# One rank: nothing to exchange.  (numba needs a field; ``ranks`` is always 1.)
+NullPlan = namedtuple("NullPlan", "ranks")
+
+# The MPI plan (built by ``halo_mpi.build_plan``).  A row segment that travels (array row and columns,
+# with the pad), and a run of interface sites:
+SEGMENT = np.dtype([("block", np.int64), ("row", np.int64), ("j0", np.int64), ("n", np.int64)])
+SITES = np.dtype([("j0", np.int64), ("n", np.int64)])
+Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "
+                          "req status handles rflags")
