@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from .fronts import MAX_GAP
+
 EDGE = 0.05          # l: a front "nucleates at the driven edge" within this distance of it
 STEADY = (0.1, 0.6)  # distance from the nucleation site (l) where pulses run at their steady speed
 MARGIN = 0.25        # l/c_r: a front's slip window starts this long before its tip arrives, ends this long
@@ -35,7 +37,7 @@ def edge_fronts(run) -> list:
     return [f for f in run.fronts() if abs(f.nucleation_x - edge) < EDGE]
 
 
-def edge_nucleations(run, min_sites: int = 5, max_gap: float = 3.0) -> list:
+def edge_nucleations(run, min_sites: int = 5, max_gap: float = MAX_GAP) -> list:
     """Every front nucleated at the driven edge (``edge_fronts``), counting one cut short by the end of
     the record: a front with fewer than ``min_sites`` sites counts when its tip was still advancing
     within ``max_gap`` l/c_r of the last frame (it is young, not small)."""
@@ -711,8 +713,8 @@ def mean_block_sxx(run, t: float) -> float:
     if not len(run.snapshot_times):
         return math.nan
     mesh = run.snapshot_at(t)
-    rows = run.scene.get("lattice.bottom_rows", 20)
-    if run.scene.get("lattice.substrate", "elastic") == "rigid":
+    rows = run.scene["lattice.bottom_rows"]
+    if run.scene["lattice.substrate"] == "rigid":
         rows = 1
     y_cut = (rows - 1) * math.sqrt(3) / 2 + run.scene.get("interface.delta0", 0.5) / 2
     top = np.asarray(mesh.points)[:, 1] > y_cut

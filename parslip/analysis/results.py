@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..io import contract
+from .fronts import MAX_GAP
 
 
 class Run:
@@ -226,18 +227,18 @@ class Run:
     def fates(self, **kw) -> list[str]:
         """What became of each front of ``fronts(**kw)``: "crossed", "edge", "arrested" or "running"."""
         from .friction import fate
-        gap = kw.get("max_gap", 3.0)
+        gap = kw.get("max_gap", MAX_GAP)
         return [fate(f, self.interface, gap) for f in self.fronts(**kw)]
 
     def precursors(self, **kw) -> list:
         """The fronts that arrested inside the contact (``analysis.friction.Precursor``: arrest time, site, length)."""
         from .friction import precursors
-        return precursors(self.interface, self.fronts(**kw), kw.get("max_gap", 3.0))
+        return precursors(self.interface, self.fronts(**kw), kw.get("max_gap", MAX_GAP))
 
     def observables(self, **kw) -> dict:
         """The run's friction and front observables as one flat row (``analysis.friction.observables``)."""
         from .friction import observables
-        return observables(self.interface, self._fn(), self.fronts(**kw), kw.get("max_gap", 3.0))
+        return observables(self.interface, self._fn(), self.fronts(**kw), kw.get("max_gap", MAX_GAP))
 
     def _fn(self) -> float | None:
         fn = self.scene.get("load.FN")

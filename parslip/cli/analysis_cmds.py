@@ -12,6 +12,7 @@ import os
 
 
 def register(sub) -> None:
+    from ..analysis.fronts import MAX_GAP
     """Add this module's subcommands to the ``parslip`` parser."""
     raw = argparse.RawDescriptionHelpFormatter
     f = sub.add_parser("fronts", help="rupture-front catalogue and friction record (mu_s, precursors) of a run "
@@ -21,8 +22,8 @@ def register(sub) -> None:
     f.add_argument("--json", action="store_true",
                    help="print one JSON object: first break, static peak, precursors and the list of fronts")
     f.add_argument("--min-sites", type=int, default=5, help="drop fronts that broke fewer bonds (default 5)")
-    f.add_argument("--max-gap", type=float, default=3.0,
-                   help="longest pause of a tip whose bond re-attached, in l/c_r (default 3)")
+    f.add_argument("--max-gap", type=float, default=MAX_GAP,
+                   help=f"longest pause of a tip whose bond re-attached, in l/c_r (default {MAX_GAP:g})")
     f.add_argument("--window", type=int, default=2,
                    help="local speed fitted over 2*WINDOW+1 sites (default 2)")
     f.set_defaults(func=cmd_fronts)
