@@ -60,6 +60,7 @@ FIELD_NAMES = tuple(fields())
 
 def field_spec(run, name: str) -> Field:
     """The ``Field`` called ``name``; ConfigError naming the accepted ones otherwise."""
+    # A file written before material.velocity_unit existed ran in c_s, the only unit there was then.
     unit = str(run.scene.get("material.velocity_unit", "c_s")) if hasattr(run, "scene") else "c_s"
     table = fields(unit)
     if name not in table:

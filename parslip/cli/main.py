@@ -17,7 +17,6 @@ import importlib
 import sys
 
 from ..errors import EXIT_BAD_INPUT, ConfigError
-from ..scene.schema import describe_keys
 
 UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_r of the top
 block (or c_s with material.velocity_unit = "c_s"); scene times, like the
@@ -28,7 +27,7 @@ output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
 # Further subcommands live in their own modules: each has ``register(sub)``,
 # which adds its parser with ``set_defaults(func=...)``; ``func(args)`` returns
 # the exit code.  Their heavy imports stay inside ``func``.
-COMMAND_MODULES = ("parslip.cli.analysis_cmds", "parslip.cli.viz_cmds", "parslip.cli.bench_cmds",
+COMMAND_MODULES = ("parslip.cli.scene_cmds", "parslip.cli.analysis_cmds", "parslip.cli.viz_cmds", "parslip.cli.bench_cmds",
                    "parslip.cli.paper_cmds", "parslip.cli.sweep_cmds", "parslip.cli.draw_cmds")
 
 
@@ -58,14 +57,6 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--no-png", action="store_true", help="skip the space-time picture (OUT_spacetime.png)")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
     r.set_defaults(func=lambda a: _cmd_run(a), mpi=True)
-    i = sub.add_parser("info", help="derived quantities, cost, memory, output size, what is left out, warnings",
-                       epilog=UNITS_HELP,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
-    i.add_argument("scene")
-    i.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    i.add_argument("--ranks", type=int, default=1, metavar="N",
-                   help="rank count the memory and wall-time estimates are for (default 1)")
-    sub.add_parser("keys", help="every scene key with default, units and accepted range")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
     return p
@@ -74,11 +65,6 @@ def _parser() -> argparse.ArgumentParser:
 def _cmd_run(args) -> int:
     from .run import cmd_run
     return cmd_run(args, args.comm)
-
-
-def cmd_info(args) -> int:
-    from .info import cmd_info as info
-    return info(args)
 
 
 def main(argv=None) -> int:
@@ -97,11 +83,6 @@ def main(argv=None) -> int:
     args.comm = comm
     rank = comm.Get_rank() if comm is not None else 0
     try:
-        if args.cmd == "keys":
-            print(describe_keys())
-            return 0
-        if args.cmd == "info":
-            return cmd_info(args)
         return args.func(args)
     except ConfigError as e:
         if rank == 0:

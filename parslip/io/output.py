@@ -194,7 +194,7 @@ class Output:
         def hook(u):
             if isinstance(u.exc_value, (OSError, RuntimeError)) and "h5py" in str(u.object):
                 if self._error is None:
-                    self._error = ("(metadata)", _one_line(u.exc_value))
+                    self._error = ("(metadata)", _hdf5_error_line(u.exc_value))
                 return
             prev(u)
         self._prev_unraisable = prev
@@ -243,7 +243,7 @@ class Output:
         try:
             fn()
         except (OSError, RuntimeError) as e:
-            self._error = (what, _one_line(e))
+            self._error = (what, _hdf5_error_line(e))
 
     def _put(self, name, index, data):
         """Write my slice ``index`` (a tuple of slices) of dataset ``name``."""
@@ -638,7 +638,7 @@ class Output:
                 f.attrs["status"] = status
                 f.close()
             except (OSError, RuntimeError) as e:
-                err = _one_line(e)
+                err = _hdf5_error_line(e)
                 # Never close twice, and never free the objects of a file whose close failed: HDF5 (1.14)
                 # crashes on either.  They are kept until the process ends (``cli.run`` ends it at once).
                 _UNCLOSABLE.append((f, self._handles))
@@ -653,7 +653,7 @@ class Output:
         self._agree_write()
 
 
-def _one_line(e: BaseException) -> str:
+def _hdf5_error_line(e: BaseException) -> str:
     """An h5py/HDF5 error as one line: HDF5's multi-line "file write failed" text becomes its errno text."""
     import re
     text = str(e)

@@ -98,7 +98,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     engine would take for a blow-up (``limits.check_setup``)."""
     mat = Material.from_scene(scene["material.nu"], scene["material.model"], scene["material.velocity_unit"],
                               scene["material.bottom_kn"], scene["material.bottom_kt"],
-                              scene.get("material.kn_spring", "along"))
+                              scene["material.kn_spring"])
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     law = InterfaceLaw.from_scene(scene)

@@ -92,7 +92,7 @@ def role_scene(role: str, sets: dict | None = None, shrink: bool = False, maps_d
         keys.update(SHRINK)
         keys["drive.v0"] = SHRINK_V0 * keys["drive.v0"] / (1e-4 if keys["drive.mode"] == "shear" else 1e-3)
         keys["drive.duration"] = SHRINK_DURATION if role != MAPS else maps_duration
-        keys["output.snapshots"] = 0 if keys.get("output.snapshots", 20) == 0 else 3
+        keys["output.snapshots"] = 0 if keys.get("output.snapshots", SCHEMA["output.snapshots"].default) == 0 else 3
     per_node = sets.get("load.FN") == "per_node"
     if per_node:
         sets.pop("load.FN")

@@ -359,7 +359,8 @@ class _Stop:
             signal.signal(sig, h)
 
 
-def _one_line(e: BaseException) -> str:
+def _error_line(e: BaseException) -> str:
+    """An exception's text on one line (its whitespace collapsed), or its class name when it has none."""
     return " ".join(str(e).split()) or e.__class__.__name__
 
 
@@ -378,13 +379,13 @@ def run_point(sw: Sweep, p: Point, outdir: str, comm=None, stop_after: float | N
         oc = run_scene(sw.base, out=out, sets=sets, restart="auto", comm=comm, progress=False,
                        stop_after=stop_after, command=f"parslip sweep {sw.path} ({p.name})")
     except (ConfigError, RunError) as e:
-        rec.update(status=f"failed: {_one_line(e)}")
+        rec.update(status=f"failed: {_error_line(e)}")
         oc = None
     except Exception as e:            # noqa: BLE001 - on one rank: a bug in one point must not end the sweep
         if comm is not None and comm.Get_size() > 1:
             raise                     # run_scene has already taken the job down
         traceback.print_exc()
-        rec.update(status=f"failed: internal error {e.__class__.__name__}: {_one_line(e)}")
+        rec.update(status=f"failed: internal error {e.__class__.__name__}: {_error_line(e)}")
         oc = None
     rec["wall_s"] = float(rec.get("wall_s", 0.0)) + (time.monotonic() - t0)
     if oc is not None:
@@ -414,7 +415,7 @@ def _finish_record(rec: dict, out: str) -> None:
                 os.remove(ck)         # the end-of-run checkpoint of a finished point: only disk now
     except (ConfigError, OSError, KeyError, ValueError) as e:
         if rec["status"] == "ok":
-            rec["status"] = f"failed: its output cannot be read ({_one_line(e)})"
+            rec["status"] = f"failed: its output cannot be read ({_error_line(e)})"
 
 
 def _wait_all(comm) -> None:
