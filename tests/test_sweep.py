@@ -189,6 +189,14 @@ def test_sweep_runs_every_point_records_failures_and_writes_the_table(here, caps
     assert "this job ran 6: 0 ok, 6 failed" in capsys.readouterr().out
 
 
+def _state(pid: int) -> str:
+    """The process state letter of ``pid`` (T: stopped), from /proc; "" once it is gone."""
+    try:
+        return open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return ""
+
+
 def test_a_killed_sweep_resumes_its_point_from_the_checkpoint(here):
     """SIGKILL while the first point runs (after its first checkpoint): the sweep run again finds it
     'running', continues it from the checkpoint, runs the rest; its file equals an uninterrupted run's."""
@@ -198,12 +206,18 @@ def test_a_killed_sweep_resumes_its_point_from_the_checkpoint(here):
     path = _write(here / "long.toml", text)
     cmd = [sys.executable, "-m", "parslip", "sweep", path, "-o", "out"]
     env = cli_env()
-    p = subprocess.Popen(cmd, cwd=here, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    # The point stops itself (the hook stop_at) at 30 l/c_r of drive, past its first checkpoint at 20, and
+    # is killed there: however fast the host, it cannot finish first.
+    from parslip.scene.derive import derive
+    from parslip.scene.load import load
+    st = derive(load(str(here / "tiny.toml"), {**long, "load.FN": 1.0}))
+    stop = st.n_drive_start + (st.n_steps - st.n_drive_start) * 30 // 400
+    p = subprocess.Popen(cmd, cwd=here, env={**env, "PARSLIP_TEST_HOOKS": f"stop_at=0:{stop}"},
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     ckpt = here / "out" / "points" / "p000.vtkhdf.ckpt.h5"
     deadline = time.monotonic() + 120
-    while not ckpt.exists() and time.monotonic() < deadline and p.poll() is None:
+    while _state(p.pid) != "T" and time.monotonic() < deadline and p.poll() is None:
         time.sleep(0.05)
-    time.sleep(0.3)
     p.send_signal(signal.SIGKILL)
     p.wait()
     assert ckpt.exists(), p.stderr.read().decode()[-2000:]
