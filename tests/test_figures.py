@@ -199,8 +199,8 @@ def test_push_against_pull_speeds_on_a_log_axis(small_run, tmp_path, monkeypatch
     run = parslip.open(small_run)
     scales = []
     real_save = figures.save
-    monkeypatch.setattr(figures, "save", lambda fig, d, name: scales.append(
-        [ax.get_yscale() for ax in fig.axes if ax.get_lines()]) or real_save(fig, d, name))
+    monkeypatch.setattr(figures, "save", lambda fig, d, name, source=None: scales.append(
+        [ax.get_yscale() for ax in fig.axes if ax.get_lines()]) or real_save(fig, d, name, source))
     figures.compare_speeds([run, run], str(tmp_path), n=1, scale="c_r")
     figures.compare_speeds([run, run], str(tmp_path), n=1, scale="v0")
     assert scales == [["log"], ["linear"]]

@@ -1,6 +1,7 @@
 """The friction record and its observables: the block's momentum balance on real runs, and the static
 peak, the slip onset, the fronts' fates and the precursors on drawn records with known answers."""
 import json
+import pathlib
 import math
 
 import h5py
@@ -240,3 +241,37 @@ def test_a_record_without_forces_gets_no_friction_figure(tmp_path):
     from parslip.analysis import figures
     run = Run.from_arrays(blank(20), {"drive.mode": "push", "drive.v0": 0.01})
     assert figures.fig_friction(run, str(tmp_path)) == [] and not list(tmp_path.iterdir())
+
+
+def test_slip_events_are_the_drops_of_mu_with_the_precursors_before_them():
+    """The drawn record: mu rises to 2.0 at frame 200 and falls to 0.5 at frame 259 (a drop of 75 % of the
+    largest mu, 3.5), then rises to the end: one slip event, from frame 200 to 259, preceded by the three
+    precursors (arrested at frames before 200) with their arrest lengths and mu at their arrests.  A
+    threshold above the drop finds none; a record that falls at its end holds an open event."""
+    it, arr = _record()
+    it["loader"] = np.arange(400) * 1e-3
+    fr = FR.front_catalogue(it)
+    ev = FR.slip_events(it, fr)
+    assert len(ev) == 1
+    e = ev[0]
+    assert (round(e.t_start / DT), round(e.t_end / DT)) == (200, 259)
+    assert (e.mu_before, e.mu_after) == (pytest.approx(2.0), pytest.approx(0.5)) and e.drop == pytest.approx(1.5)
+    assert e.loader == pytest.approx(0.2)
+    pre = FR.precursors(it, fr)
+    assert e.precursors == [p.index for p in pre] and len(pre) == 3
+    assert e.precursor_lengths == pytest.approx([p.arrest_length for p in pre])
+    assert e.precursor_mu == pytest.approx([0.01 * round(p.arrest_time / DT) for p in pre])
+    assert FR.slip_events(it, fr, min_drop=0.45) == []               # 1.5 < 0.45 * 3.5
+    it2 = {k: (v[:240] if isinstance(v, np.ndarray) and v.shape[:1] == (400,) else v) for k, v in it.items()}
+    open_ev = FR.slip_events(it2, [])
+    assert len(open_ev) == 1 and round(open_ev[0].t_end / DT) == 239     # still falling when the record ends
+
+
+def test_fronts_command_lists_the_slip_events(small_run, capsys):
+    assert main(["fronts", small_run, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    run = parslip.open(small_run)
+    assert out["slip_events"] == [e.to_dict() for e in run.slip_events()]
+    assert main(["fronts", small_run]) == 0
+    assert "slip event" in capsys.readouterr().out
+    assert main(["figures", small_run, "-o", str(pathlib.Path(small_run).parent / "ss"), "--only", "stick_slip"]) == 0

@@ -469,8 +469,56 @@ def fig_friction(run, out_dir: str) -> list[str]:
     return save(fig, out_dir, "friction", run)
 
 
+def fig_stick_slip(run, out_dir: str) -> list[str]:
+    """Stick-slip: mu(t) with each slip event (``analysis.friction.slip_events``) shaded from its peak to its
+    trough, and the precursors (fronts arrested inside the contact) marked at their arrest; beside it
+    each event's mu before and after against the loader's displacement, and every precursor's arrest
+    length against F_T/F_N at its arrest."""
+    from .friction import MIN_DROP, mu as mu_of, slip_events
+    if "mu" not in run.interface:
+        log.info("stick-slip figure skipped: the record holds no /interface/mu")
+        return []
+    plt = pyplot()
+    iface = run.interface
+    t, m = iface["t"], mu_of(iface)
+    events = slip_events(iface, run.fronts())
+    fig, (ax, bx, cx) = plt.subplots(1, 3, figsize=(13, 3.8), gridspec_kw={"width_ratios": [2.2, 1, 1]})
+    ax.plot(t, m, color="k", lw=0.7)
+    for e in events:
+        ax.axvspan(e.t_start, e.t_end, color="tab:red", alpha=0.15, lw=0)
+    ax.plot([e.t_start for e in events], [e.mu_before for e in events], "v", color="tab:red", ms=5,
+            label=f"slip events ({len(events)}): drops of mu by >= {MIN_DROP:.0%} of its largest")
+    pre_t = [p.arrest_time for p in run.precursors()]
+    if pre_t:
+        k = np.clip(np.searchsorted(t, pre_t), 0, len(t) - 1)
+        ax.plot(t[k], m[k], "X", color="tab:blue", ms=6, label=f"precursor arrests ({len(pre_t)})")
+    ax.set_xlabel("t c_r / l")
+    ax.set_ylabel("mu = -F_T / F_N")
+    legend(ax, 7)
+    ax.set_title(_title(run), fontsize=8)
+    bx.plot([e.loader for e in events], [e.mu_before for e in events], "v-", color="tab:red", ms=4, lw=0.6,
+            label="before")
+    bx.plot([e.loader for e in events], [e.mu_after for e in events], "^-", color="tab:green", ms=4, lw=0.6,
+            label="after")
+    bx.set_xlabel("loader displacement at the slip / l")
+    bx.set_ylabel("mu")
+    legend(bx, 7)
+    bx.set_title("each slip event", fontsize=8)
+    lengths = [x for e in events for x in e.precursor_lengths]
+    ratios = [x for e in events for x in e.precursor_mu]
+    if lengths:
+        cx.plot(ratios, lengths, "X", color="tab:blue")
+    else:
+        cx.text(0.5, 0.5, "no precursor:\nno front arrested\ninside the contact", ha="center", va="center",
+                transform=cx.transAxes, fontsize=8)
+    cx.set_xlabel("F_T / F_N at the arrest")
+    cx.set_ylabel("arrest length / l")
+    cx.set_title("precursors", fontsize=8)
+    return save(fig, out_dir, "stick_slip", run)
+
+
 FIGURES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "slip_records",
-           "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit", "friction")
+           "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit", "friction", "stick_slip")
 
 
 def write_all(run, out_dir: str, only=None) -> list[str]:
@@ -480,7 +528,7 @@ def write_all(run, out_dir: str, only=None) -> list[str]:
         "stress_maps": fig_stress_maps, "slip_records": fig_slip_records,
         "slip_behind_tips": fig_slip_behind_tips, "slip_velocity": fig_slip_velocity,
         "pulse_width": fig_pulse_width, "mode2_fit": lambda r, d: fig_mode2(r, d)[0],
-        "friction": fig_friction,
+        "friction": fig_friction, "stick_slip": fig_stick_slip,
     }
     paths = []
     for name in (only or FIGURES):

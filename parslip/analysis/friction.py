@@ -124,6 +124,26 @@ def _clean(v):
     return v
 
 
+@dataclass
+class SlipEvent:
+    """One slip event of a stick-slip record: a drop of mu(t) = -F_T/F_N from a peak to a trough by at
+    least the catalogue's ``min_drop`` (times in l/c_r, mu dimensionless, loader displacement in l)."""
+    index: int                      # 0-based, in time order
+    t_start: float                  # the peak's frame: the end of the stick phase
+    t_end: float                    # the trough's frame: the end of the slip
+    mu_before: float                # mu at the peak
+    mu_after: float                 # mu at the trough
+    drop: float                     # mu_before - mu_after
+    loader: float                   # the loader's (or driven face's) displacement at the peak, l
+    fronts: list                    # catalogue indices of the fronts nucleated since the previous slip ended
+    precursors: list                # catalogue indices of the fronts that arrested since the previous slip
+    precursor_lengths: list         # their arrest lengths, l
+    precursor_mu: list              # mu at each one's arrest, F_T/F_N
+
+    def to_dict(self) -> dict:
+        return {k: (list(v) if isinstance(v, list) else _clean(v)) for k, v in self.__dict__.items()}
+
+
 def mu(iface: dict) -> np.ndarray:
     """mu(t) = -F_T / F_N per frame (``/interface/mu``); NaN for a record written without forces."""
     if "mu" in iface:
@@ -326,3 +346,69 @@ def summary(iface: dict, fn: float | None = None) -> str:
     if "mu" in iface and len(iface["x"]):
         lines += summary_lines(iface, fn, fr)
     return "\n".join(lines)
+
+
+# The smallest drop of mu that counts as a slip event, as a share of the record's largest mu: twice the
+# rebound after a slip in the push through a soft loader (drive.spring = 0.05: about 10 %), and twenty
+# times the frame-to-frame jitter of mu while it slides (about 1 %).
+MIN_DROP = 0.2
+
+
+def slip_events(iface: dict, fr: list[Front] | None = None, min_drop: float = MIN_DROP,
+                max_gap: float = MAX_GAP) -> list[SlipEvent]:
+    """The slip events of a stick-slip record: each drop of mu(t) from a peak to the following trough by
+    at least ``min_drop`` times the record's largest mu, found as a drawdown (a stick phase ends where mu
+    has fallen that far below its running peak; the slip ends at the lowest mu before mu has risen that
+    far again).  With each event: mu before and after, the loader's displacement at its start, the fronts
+    nucleated since the previous event ended, and the precursors (fronts arrested inside the contact) since the previous event
+    with their arrest lengths and mu at arrest.  An event still falling at the record's end is included."""
+    m, t = mu(iface), np.asarray(iface["t"], float)
+    ok = np.isfinite(m)
+    if not ok.any():
+        return []
+    threshold = min_drop * float(np.nanmax(np.abs(m)))
+    if threshold <= 0:
+        return []
+    spans, k_peak, k_low, slipping = [], int(np.argmax(ok)), None, False
+    for k in np.flatnonzero(ok):
+        if not slipping:
+            if m[k] >= m[k_peak]:
+                k_peak = k
+            elif m[k_peak] - m[k] >= threshold:
+                slipping, k_low = True, k
+        elif m[k] < m[k_low]:
+            k_low = k
+        elif m[k] - m[k_low] >= threshold:
+            spans.append((k_peak, k_low))
+            slipping, k_peak = False, k
+    if slipping:
+        spans.append((k_peak, k_low))
+    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
+    pre = precursors(iface, fr, max_gap)
+    loader = np.asarray(iface.get("loader", np.zeros(len(t))), float)
+    out, t_prev = [], -math.inf
+    for i, (a, b) in enumerate(spans):
+        mine = [p for p in pre if t_prev < p.arrest_time <= t[a]]
+        out.append(SlipEvent(
+            i, float(t[a]), float(t[b]), float(m[a]), float(m[b]), float(m[a] - m[b]), float(loader[a]),
+            [j for j, f in enumerate(fr) if t_prev < f.nucleation_time <= t[b]],
+            [p.index for p in mine], [float(p.arrest_length) for p in mine],
+            [float(m[min(int(np.searchsorted(t, p.arrest_time)), len(m) - 1)]) for p in mine]))
+        t_prev = float(t[b])
+    return out
+
+
+def slip_event_lines(events: list[SlipEvent], min_drop: float = MIN_DROP) -> list[str]:
+    """The slip-event catalogue as a table (``parslip fronts``)."""
+    if not events:
+        return [f"no slip event (no drop of mu by {min_drop:.0%} of its largest value)"]
+    lines = [f"{len(events)} slip events (drops of mu by at least {min_drop:.0%} of its largest value; times "
+             f"exact to the frame, every output.interface_dt):",
+             f"  {'#':>3} {'t_start':>8} {'t_end':>8} {'mu_before':>9} {'mu_after':>9} {'drop':>7} "
+             f"{'loader':>8} {'fronts':>6} {'precursors':>10}",
+             f"  {'':>3} {'l/c_r':>8} {'l/c_r':>8} {'':>9} {'':>9} {'':>7} {'l':>8} {'':>6} {'(arrest l)':>10}"]
+    for e in events:
+        pre = ", ".join(f"{x:.3g}" for x in e.precursor_lengths) or "-"
+        lines.append(f"  {e.index + 1:>3} {e.t_start:>8.3f} {e.t_end:>8.3f} {e.mu_before:>9.4g} {e.mu_after:>9.4g} "
+                     f"{e.drop:>7.3g} {e.loader:>8.4g} {len(e.fronts):>6} {pre:>10}")
+    return lines

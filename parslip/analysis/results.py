@@ -15,6 +15,7 @@ asked for.
     mesh = run.snapshot_at(30.0) # pyvista UnstructuredGrid nearest t = 30 l/c_r
     [f.nucleation_time for f in run.fronts()]
     run.mu, run.mu_s, run.static_peak, run.precursors()   # friction (analysis.friction)
+    run.slip_events()            # stick-slip: each drop of mu with mu before and after, and its precursors
 """
 from __future__ import annotations
 
@@ -234,6 +235,14 @@ class Run:
         """The fronts that arrested inside the contact (``analysis.friction.Precursor``: arrest time, site, length)."""
         from .friction import precursors
         return precursors(self.interface, self.fronts(**kw), kw.get("max_gap", MAX_GAP))
+
+    def slip_events(self, min_drop: float | None = None, **kw) -> list:
+        """The stick-slip record's slip events (``analysis.friction.SlipEvent``): each drop of mu(t) by at least
+        ``min_drop`` (default ``friction.MIN_DROP``) of its largest value, with mu before and after, the loader's
+        displacement, and the precursors since the previous event."""
+        from .friction import MIN_DROP, slip_events
+        return slip_events(self.interface, self.fronts(**kw), MIN_DROP if min_drop is None else min_drop,
+                           kw.get("max_gap", MAX_GAP))
 
     def observables(self, **kw) -> dict:
         """The run's friction and front observables as one flat row (``analysis.friction.observables``)."""

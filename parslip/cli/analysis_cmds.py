@@ -12,6 +12,7 @@ import os
 
 
 def register(sub) -> None:
+    from ..analysis.friction import MIN_DROP
     from ..analysis.fronts import MAX_GAP
     """Add this module's subcommands to the ``parslip`` parser."""
     raw = argparse.RawDescriptionHelpFormatter
@@ -24,6 +25,9 @@ def register(sub) -> None:
     f.add_argument("--min-sites", type=int, default=5, help="drop fronts that broke fewer bonds (default 5)")
     f.add_argument("--max-gap", type=float, default=MAX_GAP,
                    help=f"longest pause of a tip whose bond re-attached, in l/c_r (default {MAX_GAP:g})")
+    f.add_argument("--min-drop", type=float, default=MIN_DROP,
+                   help=f"a slip event is a drop of mu by at least this share of its largest value "
+                        f"(default {MIN_DROP:g})")
     f.add_argument("--window", type=int, default=2,
                    help="local speed fitted over 2*WINDOW+1 sites (default 2)")
     f.set_defaults(func=cmd_fronts)
@@ -79,7 +83,7 @@ its place relative to the first break, and the precursors."""
 
 
 FIGURE_NAMES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "slip_records",
-                "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit", "friction")
+                "slip_behind_tips", "slip_velocity", "pulse_width", "mode2_fit", "friction", "stick_slip")
 
 FIGURES_HELP = """Write the figure set of the paper's Sec. 3 and appendices for one run:
 space-time diagram with the detected fronts (Figs. 2b/4b/6b), front speed v/c_r
@@ -123,18 +127,23 @@ def _positive(name: str, value, accepted: str) -> None:
 def cmd_fronts(args) -> int:
     import json
 
+    from ..errors import ConfigError
+
     from ..analysis.fronts import table
     from ..analysis.results import open as open_run
 
     _positive("min-sites", args.min_sites, "accepted: an integer >= 1")
     _positive("max-gap", args.max_gap, "accepted: a time > 0 in l/c_r")
     _positive("window", args.window, "accepted: an integer >= 1")
+    if not 0 < args.min_drop < 1:
+        raise ConfigError(f"--min-drop {args.min_drop!r}: out of range; accepted: a share of mu between 0 and 1")
     run = open_run(args.run)
     kw = dict(max_gap=args.max_gap, min_sites=args.min_sites, window=args.window)
     fr = run.fronts(**kw)
     fates = run.fates(**kw)
     pre = run.precursors(**kw)
     has_mu = "mu" in run.interface
+    slips = run.slip_events(args.min_drop, **kw) if has_mu else []
     if args.json:
         arrest = {p.index: p.arrest_length for p in pre}
         fronts = []
@@ -145,7 +154,8 @@ def cmd_fronts(args) -> int:
         tb, xb = run.first_break
         print(json.dumps({"run": args.run, "first_break": {"time": tb, "x": [float(v) for v in xb]},
                           "static_peak": run.static_peak.to_dict() if has_mu else None,
-                          "precursors": [p.to_dict() for p in pre], "fronts": fronts}))
+                          "precursors": [p.to_dict() for p in pre], "fronts": fronts,
+                          "slip_events": [e.to_dict() for e in slips]}))
         return 0
     print(f"{args.run}: {run.mode}, v0/c_r = {run.v0:g}, {len(run.times)} frames x {len(run.x)} sites; "
           f"{len(fr)} rupture fronts")
@@ -155,7 +165,9 @@ def cmd_fronts(args) -> int:
         print(table(fr, fates, {p.index: p.arrest_length for p in pre}))
     if has_mu:
         from ..analysis.friction import summary_lines
+        from ..analysis.friction import slip_event_lines
         print("\n".join(summary_lines(run.interface, run.scene.get("load.FN"), fr, args.max_gap)))
+        print("\n".join(slip_event_lines(slips, args.min_drop)))
     return 0
 
 
