@@ -8,6 +8,7 @@
 #   bash postprocess/docs_numbers.sh friction   # docs/studies/friction_*.csv, img/map_*, img/friction_* (~3 min, 2 ranks)
 #   bash postprocess/docs_numbers.sh paper      # docs/studies/img/ figures of the paper page (~6 min)
 #   bash postprocess/docs_numbers.sh scaling    # docs/hpc/shear_l500_*.png and the l = 500 run's numbers (~4 min, 2 ranks)
+#   bash postprocess/docs_numbers.sh interfaces # docs/studies/interfaces_*.csv and img/interfaces_* (~4 min, 2 ranks)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
@@ -15,7 +16,7 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
@@ -55,6 +56,11 @@ scaling)
         "$PY" -m parslip render "$OUT/shear_l500.vtkhdf" --field sxy --time $t -o "$DOCS/hpc/shear_l500_sxy_t$t.png"
     done
     "$PY" -m parslip fronts "$OUT/shear_l500.vtkhdf" ;;
+interfaces)
+    for s in precursors barriers supershear heal_time heal_speed; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "run/studies/interface_$s.toml" -o "$OUT/interfaces/interface_$s"
+    done
+    "$PY" postprocess/interface_studies.py --dir "$OUT/interfaces" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces" >&2; exit 2 ;;
 esac

@@ -1,0 +1,122 @@
+"""Measures of a rupture front that the interface studies ask for, from the front catalogue and the
+interface record (``analysis.fronts``, ``io.contract``); no file access of its own.
+
+andrews_s(iface, front)         Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) as the
+                                run has it along the front's path (the 2D supershear threshold is S ~ 1.77)
+daughters(fronts)               fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
+speed_summary(fronts)           the largest local speed fitted over the catalogue's window, and how many
+                                sites ran above c_s or broke in bursts
+through_patch(front, lo, hi)    how a front met a patch [lo, hi) of the contact: its mean speed before,
+                                inside and after it, and whether it got through
+
+Units: x in l, t in l/c_r, speeds in c_r, tractions in rho c_r^2 (``/interface/sxy``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .fronts import Front
+
+# S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
+# 1.77 (tau_0 - tau_res).
+ANDREWS_S_2D = 1.77
+
+
+def _sites(iface: dict, front: Front) -> np.ndarray:
+    """Indices of the sites on the front's path, in the order its tip reached them."""
+    return np.clip(np.rint(np.asarray(front.tip["x"]) * len(iface["x"]) - 0.5).astype(int), 0, len(iface["x"]) - 1)
+
+
+def andrews_s(iface: dict, front: Front) -> dict:
+    """S = (tau_peak - tau_0) / (tau_0 - tau_res) along the front's path, from the interface shear traction
+    sxy of the frames: tau_0, the mean over the path of the traction in the last frame before the front
+    nucleated; tau_peak, the mean over the path of each site's largest traction up to the frame that first
+    shows its break; tau_res, the mean traction over the path in the frame where the front ends.  The
+    tractions are taken with the sign of tau_peak, so S does not depend on the drive's direction.  Returns
+    {"S", "tau_0", "tau_peak", "tau_res"}; S is NaN when tau_0 - tau_res is not positive (nothing was
+    released)."""
+    nan = {"S": math.nan, "tau_0": math.nan, "tau_peak": math.nan, "tau_res": math.nan}
+    if "sxy" not in iface or len(front.tip["t"]) == 0:
+        return nan
+    sxy, t = np.asarray(iface["sxy"], float), np.asarray(iface["t"], float)
+    sites = _sites(iface, front)
+    frames = np.asarray(front.tip.get("frame", np.searchsorted(t, front.tip["t"])), int)
+    frames = np.clip(frames, 0, len(t) - 1)
+    k0 = max(int(frames[0]) - 1, 0)                  # the last frame before the first break shows
+    k_end = min(int(frames.max()), len(t) - 1)
+    peak = np.array([sxy[k0:max(k, k0) + 1, s].max() if np.mean(sxy[k0:k + 1, s]) >= 0 else
+                     sxy[k0:max(k, k0) + 1, s].min() for s, k in zip(sites, frames)])
+    sign = 1.0 if np.mean(peak) >= 0 else -1.0
+    tau_0 = sign * float(np.mean(sxy[k0, sites]))
+    tau_peak = sign * float(np.mean(peak))
+    tau_res = sign * float(np.mean(sxy[k_end, sites]))
+    released = tau_0 - tau_res
+    return {"S": (tau_peak - tau_0) / released if released > 0 else math.nan,
+            "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}
+
+
+def tip_at(front: Front, t: float) -> float:
+    """The front's tip position (l) at time t: the last site it had reached by then (NaN before it began)."""
+    k = int(np.searchsorted(front.tip["t"], t, side="right")) - 1
+    return float(front.tip["x"][k]) if k >= 0 else math.nan
+
+
+def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
+    """Every front born ahead of another, running front's tip, in its direction of travel, by at least
+    ``min_gap`` (l; 2 sites of a 100-site contact): {"mother", "daughter" (catalogue indices), "t" (its
+    nucleation, l/c_r), "x" (l), "ahead" (l from the mother's tip then)}."""
+    out = []
+    for i, m in enumerate(fronts):
+        if m.direction == 0:
+            continue
+        for j, d in enumerate(fronts):
+            if j == i or not (m.nucleation_time < d.nucleation_time < m.t_end):
+                continue
+            tip = tip_at(m, d.nucleation_time)
+            ahead = (d.nucleation_x - tip) * m.direction
+            if math.isfinite(tip) and ahead >= min_gap:
+                out.append({"mother": i, "daughter": j, "t": d.nucleation_time, "x": d.nucleation_x,
+                            "ahead": float(ahead)})
+    return out
+
+
+def speed_summary(fronts: list[Front]) -> dict:
+    """{"max_speed" (the largest |local speed| any front reached, over the catalogue's fit window, bursts
+    left out), "supershear_sites" (sites run above c_s, over all fronts), "supershear_fronts" (how many
+    fronts had such a stretch), "burst_sites" (sites broken in bursts faster than c_l: near-simultaneous
+    breaks, no speed)}."""
+    speeds = [abs(f.max_speed) for f in fronts if math.isfinite(f.max_speed)]
+    return {"max_speed": max(speeds) if speeds else math.nan,
+            "supershear_sites": sum(s["n_sites"] for f in fronts for s in f.supershear),
+            "supershear_fronts": sum(1 for f in fronts if f.supershear),
+            "burst_sites": sum(b["n_sites"] for f in fronts for b in f.bursts)}
+
+
+def through_patch(front: Front, lo: float, hi: float, c_l: float = math.inf) -> dict:
+    """How ``front`` met the patch [lo, hi) (l): its mean speed over the stretch before the patch (as long
+    as the patch), inside it, and beyond it (c_r; NaN where its tip never was, or where the "speed" exceeds
+    ``c_l``: a burst of near-simultaneous breaks, counted in "bursts"), and "through": whether its tip
+    reached the far side of the patch."""
+    x, t = np.asarray(front.tip["x"], float), np.asarray(front.tip["t"], float)
+    d = front.direction or 1
+    width = hi - lo
+    near, far = (lo, hi) if d > 0 else (hi, lo)
+
+    def mean_speed(a: float, b: float) -> float:
+        inside = (x >= min(a, b)) & (x < max(a, b))
+        if inside.sum() < 2:
+            return math.nan
+        xs, ts = x[inside], t[inside]
+        v = float(abs(xs[-1] - xs[0]) / (ts[-1] - ts[0])) if ts[-1] > ts[0] else math.inf
+        if v > c_l:
+            bursts.append((min(a, b), max(a, b)))
+            return math.nan
+        return v
+    bursts: list = []
+    out = {"before": mean_speed(near - d * width, near), "inside": mean_speed(lo, hi),
+           "after": mean_speed(far, far + d * width),
+           "through": bool(np.any(x >= hi) if d > 0 else np.any(x < lo))}
+    out["bursts"] = len(bursts)
+    return out

@@ -1,0 +1,234 @@
+"""The interface studies' tables and figures (docs/studies/interfaces.md), from their sweeps' outputs.
+
+    for s in precursors barriers supershear heal_time heal_speed; do
+        mpiexec -n 2 parslip sweep run/studies/interface_$s.toml -o out/interfaces/interface_$s
+    done
+    python postprocess/interface_studies.py --dir out/interfaces -o docs/studies/img --tables docs/studies
+
+(``bash postprocess/docs_numbers.sh interfaces`` runs both.)  Each table, interfaces_<study>.csv, has a row
+per point with the swept keys, the measures (``parslip.analysis.rupture``, ``analysis.friction``) and the
+point's resolved scene and commit; the Markdown tables the page quotes are printed.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+
+import numpy as np
+
+from parslip.analysis import rupture, table
+from parslip.analysis.figures import pyplot, save
+from parslip.analysis.friction import slip_events
+from parslip.analysis.results import Run
+
+FORM = 2
+
+
+def points(d: str, study: str):
+    """(summary row, run) of each point of the sweep in d/interface_<study>."""
+    base = os.path.join(d, f"interface_{study}")
+    tab = table.read(os.path.join(base, "summary.csv"))
+    for i in range(len(tab["point"])):
+        row = {k: tab[k][i] for k in tab}
+        yield row, Run(os.path.join(base, row["out"]))
+
+
+def fmt(v):
+    if isinstance(v, float):
+        return "-" if not math.isfinite(v) else f"{v:.3g}"
+    return str(v)
+
+
+def write(rows, cols, path):
+    """CSV with the columns ``cols`` then scene and commit; returns the Markdown table of ``cols``."""
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(cols + ["scene", "commit"])
+        for r in rows:
+            w.writerow([fmt(r[c]) if isinstance(r[c], float) else r[c] for c in cols] + [r["scene"], r["commit"]])
+    out = ["| " + " | ".join(cols) + " |", "|" + " --- |" * len(cols)]
+    out += ["| " + " | ".join(fmt(r[c]) for c in cols) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def patch_of(run):
+    p = run.scene.get("interface.patch") or []
+    return (p[-1]["x"][0], p[-1]["x"][1], p[-1].get("delta_b", math.nan)) if p else (math.nan, math.nan, math.nan)
+
+
+def first_crossing(run, fr):
+    fates = run.fates()
+    for f, w in zip(fr, fates):
+        if w == "crossed":
+            return f
+    return fr[0] if fr else None
+
+
+def reformed_before_crossed(run, f) -> int:
+    """Re-formations on the front's path between its nucleation and its last site (Sec. 3.3.1: a crack
+    re-attaches only after the rupture has crossed)."""
+    ev = run.events
+    if ev is None or f is None:
+        return -1
+    t0, t1 = f.nucleation_time, f.t_end
+    return int(np.sum((ev["kind"] == FORM) & (ev["time"] > t0) & (ev["time"] < t1)))
+
+
+def precursors_study(d):
+    rows, pts = [], []
+    for row, run in points(d, "precursors"):
+        ev = slip_events(run.interface, run.fronts())
+        pre_all = run.precursors()
+        t, mu = run.interface["t"], run.interface["mu"]
+        pre = [(p.arrest_length, float(mu[min(int(np.searchsorted(t, p.arrest_time)), len(t) - 1)]))
+               for p in pre_all]
+        rows.append({"point": row["point"], "load.FN": row["load.FN"], "drive.rows": row["drive.rows"] or "all",
+                     "mu_s": row["mu_s"], "first_break_time": row["first_break_time"], "slip_events": len(ev),
+                     "first_slip_mu_before": ev[0].mu_before if ev else math.nan,
+                     "n_fronts": row["n_fronts"], "n_precursors": len(pre_all),
+                     "precursor_arrest_l": "; ".join(f"{L:.3g}@{m:.3g}" for L, m in pre) or "-",
+                     "scene": row["scene"], "commit": row["commit"]})
+        pts.append((row, pre))
+    return rows, pts
+
+
+def barriers_study(d):
+    rows = []
+    for row, run in points(d, "barriers"):
+        lo, hi, db = patch_of(run)
+        fr = run.fronts()
+        f = fr[0] if fr else None
+        res = rupture.through_patch(f, lo, hi, c_l=run.events["c_l"]) if f is not None and math.isfinite(lo) \
+            else {"before": math.nan, "inside": math.nan, "after": math.nan, "through": True, "bursts": 0}
+        beyond = [x for x in rupture.daughters(fr) if math.isfinite(hi) and x["mother"] == 0 and x["x"] >= hi]
+        rows.append({"point": row["point"], "drive.mode": row["drive.mode"],
+                     "patch delta_b": db if math.isfinite(db) else 0.7,
+                     "first front kind": f.kind if f else "-", "v before": res["before"], "v inside": res["inside"],
+                     "v after": res["after"], "bursts": res["bursts"], "through": res["through"], "fate": run.fates()[0] if fr else "-",
+                     "born beyond": len(beyond), "n_fronts": len(fr), "mu_s": row["mu_s"],
+                     "scene": row["scene"], "commit": row["commit"]})
+    return rows
+
+
+def supershear_study(d):
+    rows = []
+    for row, run in points(d, "supershear"):
+        fr = run.fronts()
+        sp = rupture.speed_summary(fr)
+        s = rupture.andrews_s(run.interface, fr[0]) if fr else {"S": math.nan}
+        lo, hi, db = patch_of(run)
+        c_l = run.events["c_l"]
+        v1 = abs(fr[0].mean_speed) if fr else math.nan
+        rows.append({"point": row["point"], "top_rows": row["lattice.top_rows"],
+                     "band": "0.55 at 0.2-0.5" if math.isfinite(db) else "-",
+                     "delta_b": row["interface.delta_b"], "kx": row["interface.kx"],
+                     "first mean v": v1 if v1 <= c_l else math.nan, "max v": sp["max_speed"],
+                     "supershear sites": sp["supershear_sites"], "supershear fronts": sp["supershear_fronts"],
+                     "burst sites": sp["burst_sites"], "daughters": len(rupture.daughters(fr)), "S": s["S"],
+                     "n_fronts": len(fr), "scene": row["scene"], "commit": row["commit"]})
+    return rows
+
+
+def heal_study(d, study):
+    rows = []
+    for row, run in points(d, study):
+        fr = run.fronts()
+        f = first_crossing(run, fr)
+        key = "interface.heal_time" if study == "heal_time" else "interface.heal_speed"
+        r = {"point": row["point"], key: row[key]}
+        if study == "heal_time":
+            r["drive.mode"] = row["drive.mode"]
+        else:
+            r["drive.v0"] = row["drive.v0"]
+        v = abs(f.mean_speed) if f else math.nan
+        r.update({"kind": f.kind if f else "-", "mean v": v if v <= run.events["c_l"] else math.nan,
+                  "width a": f.width if f else math.nan, "re-formed before crossing": reformed_before_crossed(run, f),
+                  "n_fronts": len(fr), "n_crossed": row["n_crossed"], "mu_s": row["mu_s"],
+                  "scene": row["scene"], "commit": row["commit"]})
+        rows.append(r)
+    return rows
+
+
+def precursor_figure(pts, out, source):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    n = 0
+    for row, pre in pts:
+        if pre:
+            n += len(pre)
+            ax.plot([m for _, m in pre], [L for L, _ in pre], "o", label=f"F_N = {row['load.FN']:g}, rows "
+                    f"{row['drive.rows'] or 'all'}")
+    if not n:
+        ax.text(0.5, 0.5, "no precursor in any run:\nno front arrested inside the contact", ha="center",
+                va="center", transform=ax.transAxes)
+    ax.set_xlabel("F_T / F_N at the arrest")
+    ax.set_ylabel("arrest length / l")
+    if n:
+        ax.legend(fontsize=7)
+    ax.set_title("precursors of the push through a soft loader", fontsize=8)
+    return save(fig, out, "interfaces_precursors", source)
+
+
+def supershear_figure(rows, out, source):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for tr, m in ((10, "o"), (40, "s")):
+        for band, c in (("-", "tab:blue"), ("0.55 at 0.2-0.5", "tab:red")):
+            sel = [r for r in rows if r["top_rows"] == tr and r["band"] == band]
+            ax.plot([r["kx"] * (1 + 0.04 * (r["delta_b"] == 0.7)) for r in sel], [r["max v"] for r in sel], m,
+                    color=c, mfc="none" if tr == 40 else c, label=f"{tr} rows, band {band}")
+    ax.axhline(1.098, color="0.4", ls="--", lw=0.8)
+    ax.text(0.051, 1.11, "c_s", fontsize=7)
+    ax.axhline(1.79, color="0.4", ls=":", lw=0.8)
+    ax.text(0.051, 1.80, "c_l", fontsize=7)
+    ax.set_xscale("log")
+    ax.set_xlabel("k_x (delta_b = 0.7 drawn 4 % right of 0.6)")
+    ax.set_ylabel("largest local front speed / c_r")
+    ax.legend(fontsize=6)
+    ax.set_title("T0 on weakened interfaces: the fastest fitted speed of each run", fontsize=8)
+    return save(fig, out, "interfaces_supershear", source)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--dir", required=True, help="directory holding the sweeps' OUTDIRs (interface_<study>)")
+    p.add_argument("-o", "--out", required=True, help="directory for the figures")
+    p.add_argument("--tables", required=True, help="directory for interfaces_<study>.csv")
+    a = p.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    os.makedirs(a.tables, exist_ok=True)
+
+    def source(rows):
+        return {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+
+    rows, pts = precursors_study(a.dir)
+    print("## precursors\n")
+    print(write(rows, ["point", "load.FN", "drive.rows", "mu_s", "first_break_time", "slip_events",
+                       "first_slip_mu_before", "n_fronts", "n_precursors", "precursor_arrest_l"],
+                os.path.join(a.tables, "interfaces_precursors.csv")))
+    precursor_figure(pts, a.out, source(rows))
+    rows = barriers_study(a.dir)
+    print("\n## barriers\n")
+    print(write(rows, ["point", "drive.mode", "patch delta_b", "first front kind", "v before", "v inside",
+                       "v after", "bursts", "through", "fate", "born beyond", "n_fronts", "mu_s"],
+                os.path.join(a.tables, "interfaces_barriers.csv")))
+    rows = supershear_study(a.dir)
+    print("\n## supershear\n")
+    print(write(rows, ["point", "top_rows", "band", "delta_b", "kx", "first mean v", "max v", "supershear sites",
+                       "supershear fronts", "burst sites", "daughters", "S", "n_fronts"],
+                os.path.join(a.tables, "interfaces_supershear.csv")))
+    supershear_figure(rows, a.out, source(rows))
+    for study, key, extra in (("heal_time", "interface.heal_time", "drive.mode"),
+                              ("heal_speed", "interface.heal_speed", "drive.v0")):
+        rows = heal_study(a.dir, study)
+        print(f"\n## {study}\n")
+        print(write(rows, ["point", extra, key, "kind", "mean v", "width a", "re-formed before crossing",
+                           "n_fronts", "n_crossed", "mu_s"], os.path.join(a.tables, f"interfaces_{study}.csv")))
+    for f in os.listdir(a.out):
+        if f.startswith("interfaces_") and f.endswith(".pdf"):
+            os.remove(os.path.join(a.out, f))
+
+
+if __name__ == "__main__":
+    main()
