@@ -1,5 +1,8 @@
 """The compiled loop against independent computations: the first engine's plain step, a brute-force
 re-bonding search, the interface kernel's reach checks, and the rigid substrate's own limits."""
+import os
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -178,3 +181,29 @@ def test_rigid_substrate_is_the_stiff_limit():
     assert steps[100.0] >= 10, steps                                # the elastic substrate delays it
     assert 2.0 <= steps[100.0] / steps[300.0] <= 4.5, steps          # ~ 1/k_n
     assert abs(steps[1e3]) <= 2 and abs(steps[1e4]) <= 1, steps
+
+
+def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
+    """numba checks a cached function against its own file only: the compiled loop would keep an old
+    interface kernel after engine/kernels/interface.py changed.  The cache folder is keyed by the kernels'
+    sources (io.cache.kernel_cache_dir), so changing interface.py alone moves it, and a change outside the
+    kernels' packages does not."""
+    import shutil
+    import subprocess
+    import sys
+    pkg = pathlib.Path(__file__).resolve().parents[1] / "parslip"
+    copy = tmp_path / "parslip"
+    shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    code = "from parslip.io.cache import kernel_cache_dir; print(kernel_cache_dir())"
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), "NUMBA_CACHE_DIR": str(tmp_path / "nc")}
+
+    def where():
+        return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                              check=True).stdout.strip()
+    first = where()
+    assert first.startswith(str(tmp_path / "nc"))
+    (copy / "analysis" / "fronts.py").write_text((copy / "analysis" / "fronts.py").read_text() + "\n# x\n")
+    assert where() == first
+    (copy / "engine" / "kernels" / "interface.py").write_text(
+        (copy / "engine" / "kernels" / "interface.py").read_text() + "\n# a change\n")
+    assert where() != first

@@ -62,3 +62,41 @@ def store(k: str, value: tuple[float, str]) -> None:
         os.replace(tmp, path)
     except OSError:
         pass
+
+
+# The subpackages whose code numba compiles into the time loop (kernels, the exchange, the law's codes).
+KERNEL_PACKAGES = ("engine", "parallel", "model")
+
+
+def kernel_cache_dir() -> str:
+    """Where numba keeps the compiled kernels: $NUMBA_CACHE_DIR (else this cache's "numba" folder), in a
+    subfolder named by a hash of the kernels' sources and the numba and Python versions.
+
+    numba checks a cached function against its own file's time stamp only, not the files of the functions
+    it calls: the compiled time loop (engine/loop.py) would keep the old interface kernel after
+    engine/kernels/interface.py changed (seen here: results that differed from the source's).  A new
+    folder for every change of any of those sources rules that out."""
+    import sys
+    h = hashlib.sha256(f"{sys.version_info[:2]}".encode())
+    try:
+        import numba
+        h.update(numba.__version__.encode())
+    except ImportError:
+        pass
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    for sub in KERNEL_PACKAGES:
+        for dirpath, dirnames, files in sorted(os.walk(os.path.join(root, sub))):
+            dirnames.sort()
+            for name in sorted(files):
+                if name.endswith(".py"):
+                    with open(os.path.join(dirpath, name), "rb") as fh:
+                        h.update(name.encode())
+                        h.update(fh.read())
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(cache_dir(), "numba")
+    return os.path.join(base, f"parslip-{h.hexdigest()[:16]}")
+
+
+def use_kernel_cache() -> None:
+    """Point numba's cache at ``kernel_cache_dir()``; called before any kernel is compiled or loaded."""
+    import numba
+    numba.config.CACHE_DIR = kernel_cache_dir()
