@@ -198,7 +198,7 @@ def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(tmp_path), "NUMBA_CACHE_DIR": str(tmp_path / "nc")}
 
     def where():
-        return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+        return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, cwd=tmp_path,
                               check=True).stdout.strip()
     first = where()
     assert first.startswith(str(tmp_path / "nc"))
