@@ -38,12 +38,16 @@ EOF
 # Debian 12's ParaView 5.11: pvpython is in python3-paraview.  Recommends are skipped (docs, and
 # mpi-default-bin; Open MPI comes anyway through python3-mpi4py, and tests/conftest.py keeps the
 # suite's mpiexec on mpi4py's MPI).  Without apt-get the pvpython tests skip and say why.
-install_paraview() {
-    if command -v pvpython >/dev/null 2>&1; then
+# apt_provide COMMAND HINT PACKAGE...: Debian's PACKAGEs, unless COMMAND is on the PATH already; without
+# apt-get, HINT is said and the tests that need COMMAND skip and say why.
+apt_provide() {
+    local cmd=$1 hint=$2
+    shift 2
+    if command -v "$cmd" >/dev/null 2>&1; then
         return 0
     fi
     if ! command -v apt-get >/dev/null 2>&1; then
-        echo "tests/install.sh: no apt-get here; install ParaView >= 5.11 with pvpython, or its tests skip" >&2
+        echo "tests/install.sh: no apt-get here; $hint" >&2
         return 0
     fi
     local sudo=""
@@ -53,9 +57,12 @@ install_paraview() {
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update -qq
     # Another apt-get may hold the lock on a shared machine: wait for it rather than fail.
-    $sudo apt-get install -y -qq -o DPkg::Lock::Timeout=900 --no-install-recommends \
-        paraview python3-paraview >/dev/null
-    command -v pvpython >/dev/null
+    $sudo apt-get install -y -qq -o DPkg::Lock::Timeout=900 --no-install-recommends "$@" >/dev/null
+    command -v "$cmd" >/dev/null
+}
+
+install_paraview() {
+    apt_provide pvpython "install ParaView >= 5.11 with pvpython, or its tests skip" paraview python3-paraview
 }
 
 # --- Collective HDF5 output and the launcher check -------------------------------------------------
@@ -94,21 +101,7 @@ install_mathjax() {
 }
 
 install_chromium() {
-    if command -v chromium >/dev/null 2>&1; then
-        return 0
-    fi
-    if ! command -v apt-get >/dev/null 2>&1; then
-        echo "tests/install.sh: no apt-get here; install Chromium (chromium on PATH), or tests/test_site.py skips" >&2
-        return 0
-    fi
-    local sudo=""
-    if [ "$(id -u)" -ne 0 ]; then
-        sudo="sudo -n"
-    fi
-    export DEBIAN_FRONTEND=noninteractive
-    $sudo apt-get update -qq
-    $sudo apt-get install -y -qq -o DPkg::Lock::Timeout=900 --no-install-recommends chromium >/dev/null
-    command -v chromium >/dev/null
+    apt_provide chromium "install Chromium (chromium on PATH), or tests/test_site.py skips" chromium
 }
 
 install_python

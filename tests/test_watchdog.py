@@ -146,6 +146,26 @@ def tiny_disk(tmp_path):
     subprocess.run(["umount", "-l", str(d)], capture_output=True)
 
 
+def _held_run(cmd, hook: str, held, act, timeout: float = 90):
+    """Start ``cmd`` with the test hook ``hook``, wait until the run holds (it creates ``held``), do ``act(proc)``,
+    then wait for the job's end under a hard limit (a hang kills the whole process group and fails).  Returns
+    (exit code, stderr)."""
+    proc = subprocess.Popen(cmd, env=cli_env(**{HOOKS: hook}), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not held.exists():
+            assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read() if proc.poll() else ""
+            time.sleep(0.05)
+        act(proc)
+        _, err = proc.communicate(timeout=timeout)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return proc.returncode, err
+
+
 def test_a_real_full_disk_mid_run(tmp_path, long_scene, tiny_disk):
     """The disk fills up while the run writes (another file takes the rest of it): one line, exit 3,
     no traceback, no crash.  The run is held by the test hook at frame 32 until the disk is full, so the
@@ -157,14 +177,8 @@ def test_a_real_full_disk_mid_run(tmp_path, long_scene, tiny_disk):
     scene.write_text(small_toml(**{**LONG, "drive.duration": 60.0, "output.buffer_frames": 16,
                                    "output.snapshots": 0}))
     cmd = cli_command(2, "run", scene, "--out", out, "--no-png", "--set", "output.progress_s=0.2")
-    held = tiny_disk / "o.vtkhdf.held"
-    proc = subprocess.Popen(cmd, env=cli_env(**{HOOKS: "hold_at_frame=32"}), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 90
-        while not held.exists():
-            assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read() if proc.poll() else ""
-            time.sleep(0.05)
+
+    def fill_the_disk(proc):
         fd = os.open(tiny_disk / "filler", os.O_WRONLY | os.O_CREAT)     # take every block that is left
         try:
             while True:
@@ -173,13 +187,9 @@ def test_a_real_full_disk_mid_run(tmp_path, long_scene, tiny_disk):
             pass
         finally:
             os.close(fd)
-        held.unlink()                                                     # let the run go on
-        _, err = proc.communicate(timeout=90)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    assert proc.returncode == 3, err[-3000:]
+        (tiny_disk / "o.vtkhdf.held").unlink()                          # let the run go on
+    code, err = _held_run(cmd, "hold_at_frame=32", tiny_disk / "o.vtkhdf.held", fill_the_disk)
+    assert code == 3, err[-3000:]
     assert "Traceback" not in err and "Segmentation" not in err, err[-3000:]
     failed = [ln for ln in err.splitlines() if ln.startswith("parslip: run failed:")]
     assert len(failed) == 1 and "No space left on device" in failed[0], err[-3000:]
@@ -225,21 +235,10 @@ def test_sigterm_while_the_picture_is_drawn_exits_0(tmp_path):
     out = tmp_path / "o.vtkhdf"
     scene = tmp_path / "s.toml"
     scene.write_text(small_toml(**{"drive.duration": 2.0}))
-    held = tmp_path / "o_spacetime.png.held"
-    proc = subprocess.Popen(cli_command(2, "run", scene, "--out", out), env=cli_env(**{HOOKS: "hold_before_picture=1"}),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120
-        while not held.exists():
-            assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read() if proc.poll() else ""
-            time.sleep(0.05)
-        os.killpg(proc.pid, signal.SIGTERM)          # as Slurm does: every process of the job step
-        _, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    assert proc.returncode == 0, err[-3000:]
+    code, err = _held_run(cli_command(2, "run", scene, "--out", out), "hold_before_picture=1",
+                          tmp_path / "o_spacetime.png.held",
+                          lambda proc: os.killpg(proc.pid, signal.SIGTERM))   # as Slurm does: every process
+    assert code == 0, err[-3000:]
     lines = [ln for ln in err.splitlines() if ln.startswith("parslip:")]
     assert len(lines) == 1 and "SIGTERM came after the run was complete" in lines[0], err[-3000:]
     assert _status(out) == "complete"
