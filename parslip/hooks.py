@@ -90,5 +90,15 @@ def at(name: str, rank: int, step: int) -> bool:
     return v is not None and v[0] == rank and step >= v[1]
 
 
+def hold(marker: str, limit_s: float = 120.0) -> None:
+    """The hold of ``hold_at_frame`` and ``hold_before_picture``: create ``marker`` and wait until the test
+    removes it (or ``limit_s`` passes, or a signal's handler raises)."""
+    import time
+    open(marker, "w").close()
+    deadline = time.monotonic() + limit_s
+    while os.path.exists(marker) and time.monotonic() < deadline:
+        time.sleep(0.02)
+
+
 def active() -> bool:
     return bool(_HOOKS)

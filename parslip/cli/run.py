@@ -113,11 +113,7 @@ def _hold_before_picture(png: str):
     """The test hook ``hold_before_picture``: wait here, as a slow picture would, until the test says."""
     from .. import hooks
     if hooks.get("hold_before_picture"):
-        marker = f"{png}.held"
-        open(marker, "w").close()
-        deadline = time.monotonic() + 120
-        while os.path.exists(marker) and time.monotonic() < deadline:
-            time.sleep(0.02)
+        hooks.hold(f"{png}.held")
 
 
 def _report(result, args, log):

@@ -143,6 +143,7 @@ class Output:
         self._flushed = time.monotonic()   # rank 0's clock: when the file was last flushed
         self.frames_safe = 0               # frames on disk: frames_written at the last successful flush
         self._frames_set = 0               # frames_written as last set (on disk at the next flush)
+        self._held = False                 # the test hook hold_at_frame has held this run once
         st, lat = spec.setup, spec.setup.lattice
         self.rank = spec.rank
         self.size = spec.size
@@ -498,13 +499,9 @@ class Output:
         if fail is not None and frames_end > fail and self._error is None:
             self._error = ("interface/intact", f"OSError: [Errno 28] No space left on device (injected by "
                                                f"{hooks.VARIABLE})")
-        if hold is not None and frames_end > hold and not getattr(self, "_held", False):
+        if hold is not None and frames_end > hold and not self._held:
             self._held = True
-            marker = f"{self.path}.held"
-            open(marker, "w").close()
-            deadline = time.monotonic() + 120
-            while os.path.exists(marker) and time.monotonic() < deadline:
-                time.sleep(0.02)
+            hooks.hold(f"{self.path}.held")
 
     def interface_events(self, k0: int, steps, sites, kinds, partners, time_of) -> int:
         """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``)
