@@ -57,12 +57,6 @@ def andrews_s(iface: dict, front: Front) -> dict:
             "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}
 
 
-def tip_at(front: Front, t: float) -> float:
-    """The front's tip position (l) at time t: the last site it had reached by then (NaN before it began)."""
-    k = int(np.searchsorted(front.tip["t"], t, side="right")) - 1
-    return float(front.tip["x"][k]) if k >= 0 else math.nan
-
-
 def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
     """Every front born ahead of another, running front's tip, in its direction of travel, by at least
     ``min_gap`` (l; 2 sites of a 100-site contact): {"mother", "daughter" (catalogue indices), "t" (its
@@ -74,9 +68,9 @@ def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
         for j, d in enumerate(fronts):
             if j == i or not (m.nucleation_time < d.nucleation_time < m.t_end):
                 continue
-            tip = tip_at(m, d.nucleation_time)
+            tip = m.tip_at(d.nucleation_time)           # the mother has begun: d is born after it
             ahead = (d.nucleation_x - tip) * m.direction
-            if math.isfinite(tip) and ahead >= min_gap:
+            if ahead >= min_gap:
                 out.append({"mother": i, "daughter": j, "t": d.nucleation_time, "x": d.nucleation_x,
                             "ahead": float(ahead)})
     return out
