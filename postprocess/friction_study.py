@@ -71,21 +71,6 @@ def fs_figure(tab, out):
     return lines
 
 
-def md_table(rs, cols, fmt=None):
-    fmt = fmt or {}
-    out = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
-    for r in rs:
-        cells = []
-        for c in cols:
-            v = r[c]
-            if isinstance(v, float):
-                cells.append("-" if math.isnan(v) else (fmt.get(c, "{:.3g}")).format(v))
-            else:
-                cells.append(str(v))
-        out.append("| " + " | ".join(cells) + " |")
-    return "\n".join(out)
-
-
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--dir", required=True, help="directory holding the sweeps' OUTDIRs (loading, rate, ...)")
@@ -122,15 +107,15 @@ def main():
             "slip_onset_time", "mu_sliding", "rupture_kind", "n_fronts", "n_crossed", "n_precursors",
             "precursor_arrest_mean", "precursor_arrest_max", "front_speed", "slip_per_event", "wall_s"]
     print("## loading\n")
-    print(md_table(rows(L), cols, {"wall_s": "{:.1f}"}))
+    print(table.markdown(rows(L), cols, {"wall_s": "{:.1f}"}))
     print("\nF_s = F_0 + mu_i F_N fits (F_N <= 2, all with a slip onset):")
     for mode, f0, mu, n in lines:
         print(f"  {mode}: F_0 = {f0:.3f}, mu_i = {mu:.3f} ({n} points)")
     print("\n## rate\n")
-    print(md_table(rows(tabs["rate"]), ["drive.mode", "drive.v0", "drive.duration"] + cols[2:]))
+    print(table.markdown(rows(tabs["rate"]), ["drive.mode", "drive.v0", "drive.duration"] + cols[2:]))
     for mode in ("push", "shear"):
         print(f"\n## stiffness, {mode}\n")
-        print(md_table(rows(tabs[f"stiffness_{mode}"]), ["load.FN", "interface.kx"] + cols[2:]))
+        print(table.markdown(rows(tabs[f"stiffness_{mode}"]), ["load.FN", "interface.kx"] + cols[2:]))
 
 
 if __name__ == "__main__":

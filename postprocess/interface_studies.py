@@ -10,8 +10,6 @@ per point with the swept keys, the measures (``parslip.analysis.rupture``, ``ana
 point's resolved scene and commit; the Markdown tables the page quotes are printed.
 """
 import argparse
-import csv
-import json
 import math
 import os
 
@@ -34,22 +32,11 @@ def points(d: str, study: str):
         yield row, Run(os.path.join(base, row["out"]))
 
 
-def fmt(v):
-    if isinstance(v, float):
-        return "-" if not math.isfinite(v) else f"{v:.3g}"
-    return str(v)
-
-
 def write(rows, cols, path):
-    """CSV with the columns ``cols`` then scene and commit; returns the Markdown table of ``cols``."""
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(cols + ["scene", "commit"])
-        for r in rows:
-            w.writerow([fmt(r[c]) if isinstance(r[c], float) else r[c] for c in cols] + [r["scene"], r["commit"]])
-    out = ["| " + " | ".join(cols) + " |", "|" + " --- |" * len(cols)]
-    out += ["| " + " | ".join(fmt(r[c]) for c in cols) + " |" for r in rows]
-    return "\n".join(out)
+    """interfaces_<study>.csv with the columns ``cols`` then scene and commit; returns the Markdown table of
+    ``cols`` the page quotes."""
+    table.write_csv(path, cols + ["scene", "commit"], rows)
+    return table.markdown(rows, cols)
 
 
 def patch_of(run):

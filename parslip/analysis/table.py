@@ -107,6 +107,23 @@ def write_csv(path: str, cols: list[str], rows: list[dict]) -> None:
     _atomic(path, write)
 
 
+def markdown(rows: list[dict], cols: list[str], formats: dict | None = None) -> str:
+    """The rows as a Markdown table of ``cols``: floats with ``formats[col]`` (default 3 significant
+    digits), NaN as "-", anything else as its text."""
+    formats = formats or {}
+    out = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
+    for r in rows:
+        cells = []
+        for c in cols:
+            v = r[c]
+            if isinstance(v, float):
+                cells.append("-" if math.isnan(v) else formats.get(c, "{:.3g}").format(v))
+            else:
+                cells.append(str(v))
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
 def _kind(values: list) -> str:
     """The netCDF type of a column: "i8", "f8" or "str"."""
     present = [v for v in values if v is not None and not (isinstance(v, float) and math.isnan(v))]
