@@ -64,13 +64,12 @@ def cmd_run(args, comm) -> int:
             _exit_now(comm, EXIT_RUN_FAILED)
         return EXIT_RUN_FAILED
     oc = result.outcome
-    if oc.complete:
-        _after_the_run_signals_skip(rank)
     if not oc.complete:
         if rank == 0:
             print(f"parslip: {oc.status}; output kept in {oc.out}; continue with:\n"
                   f"  {continue_command(args.scene, args.set, oc.out, oc.checkpoint, size)}", file=sys.stderr)
         return EXIT_INTERRUPTED if oc.interrupted else 0
+    _after_the_run_signals_skip(rank)
     if rank == 0 and oc.step:
         try:
             _report(result, args, log)
@@ -109,16 +108,9 @@ def _exit_now(comm, code: int):
     os._exit(code)
 
 
-def _hold_before_picture(png: str):
-    """The test hook ``hold_before_picture``: wait here, as a slow picture would, until the test says."""
-    from .. import hooks
-    if hooks.get("hold_before_picture"):
-        hooks.hold(f"{png}.held")
-
-
 def _report(result, args, log):
     """Rank 0, after a complete run: the front catalogue, and the space-time picture with its cost."""
-    from .. import analysis
+    from .. import analysis, hooks
     print(analysis.summary(result.interface, result.scene.get("load.FN")))
     if args.no_png:
         log.info(f"wrote {result.path}")
@@ -127,7 +119,8 @@ def _report(result, args, log):
     t0 = time.monotonic()
     title = f"{os.path.basename(args.scene)}: {result.scene.get('drive.mode')}, " \
             f"v0/c_r = {result.scene.get('drive.v0'):g}"
-    _hold_before_picture(png)
+    if hooks.get("hold_before_picture"):        # the test hook: wait here, as a slow picture would
+        hooks.hold(f"{png}.held")
     try:
         analysis.spacetime_png(result.interface, png, title)
     except OSError as e:

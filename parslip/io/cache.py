@@ -12,6 +12,7 @@ an unwritable cache is skipped silently.
 """
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
 import os
@@ -85,13 +86,10 @@ def kernel_cache_dir() -> str:
         pass
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     for sub in KERNEL_PACKAGES:
-        for dirpath, dirnames, files in sorted(os.walk(os.path.join(root, sub))):
-            dirnames.sort()
-            for name in sorted(files):
-                if name.endswith(".py"):
-                    with open(os.path.join(dirpath, name), "rb") as fh:
-                        h.update(name.encode())
-                        h.update(fh.read())
+        for path in sorted(glob.glob(os.path.join(root, sub, "**", "*.py"), recursive=True)):
+            h.update(os.path.relpath(path, root).encode())
+            with open(path, "rb") as fh:
+                h.update(fh.read())
     base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(cache_dir(), "numba")
     return os.path.join(base, f"parslip-{h.hexdigest()[:16]}")
 
