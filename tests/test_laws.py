@@ -147,6 +147,22 @@ def test_a_heal_speed_no_slip_reaches_changes_nothing(tmp_path):
     assert forms(c) < forms(a)
 
 
+def test_the_float32_heal_clock_limit_counts_the_steps_the_loop_counts():
+    """float32 counts the healing clock (up to n_heal + 1) exactly below 2^24: the limit refuses a heal_time
+    by the loop's own n_heal = ceil(heal_time / dt), so the largest accepted heal_time, which the message
+    names, is accepted, half a step longer (2^24 - 1 steps once rounded up) is refused, and the loop is given
+    the same n_heal."""
+    import re
+
+    from parslip.errors import ConfigError
+    base = derive(scene(**{"time.precision": "float32"}))
+    hi = (2 ** 24 - 2) * base.dt / base.t_unit
+    ok = derive(scene(**{"time.precision": "float32", "interface.heal_time": hi}))
+    assert ok.law.heal_steps(ok) == ok.law.rules(np.float32, ok).n_heal == 2 ** 24 - 2
+    with pytest.raises(ConfigError, match=re.escape(f"accepted: interface.heal_time <= {hi:.4g} l/c_r")):
+        derive(scene(**{"time.precision": "float32", "interface.heal_time": (2 ** 24 - 1.5) * base.dt / base.t_unit}))
+
+
 def test_healing_and_a_random_field_survive_a_restart_on_another_rank_count(tmp_path):
     """heal_time and a random field: 3 l/c_r on 2 ranks, continued to 6 on 3 ranks, equals 6 at once on one
     rank: the clocks and candidates travel with the checkpoint and the halo."""

@@ -199,11 +199,17 @@ class InterfaceLaw:
     def rules(self, dtype, setup) -> Rules:
         """The scalars the compiled update reads, lengths in the float type ``dtype``; ``setup`` gives the
         time step (a/c), the velocity unit c_r and the time unit l/c_r (``scene.derive.Setup``)."""
-        import math
         f = np.dtype(dtype).type
         return Rules(delta0=f(self.delta0), rebond_length=f(self.rebond_length), reform=self.reform,
                      rebond=self.rebond, heal=self.heal, heal_du=f(self.heal_speed * setup.material.c_r * setup.dt),
-                     n_heal=int(math.ceil(self.heal_time * setup.t_unit / setup.dt - 1e-9)))
+                     n_heal=self.heal_steps(setup))
+
+    def heal_steps(self, setup) -> int:
+        """n_heal = ceil(heal_time / dt): the steps a claim must last before the site re-bonds (HEAL_TIME);
+        heal_time in l/c_r, ``setup`` gives dt (a/c) and the time unit l/c_r.  The 1e-9 keeps a heal_time
+        that is a whole number of steps from rounding up by one on the division's last bit."""
+        import math
+        return int(math.ceil(self.heal_time * setup.t_unit / setup.dt - 1e-9))
 
     def site_values(self, n_sites: int) -> dict:
         """Each site's own constants {"kx", "ky", "delta_b"}: arrays over the global sites 0..n_sites-1, the

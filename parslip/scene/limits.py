@@ -96,11 +96,11 @@ FLOAT32_STEPS = 2 ** 24
 def check_setup(st) -> None:
     """Refuse a drive that moves its face RUNAWAY_JUMP or more per step, and a healing clock the state's
     float type cannot count (both need dt, so after derive)."""
-    n_heal = st.law.heal_time * st.t_unit / st.dt
+    n_heal = st.law.heal_steps(st)          # the clock counts to n_heal + 1
     if st.precision == "float32" and n_heal + 1 >= FLOAT32_STEPS:
         hi = (FLOAT32_STEPS - 2) * st.dt / st.t_unit
         raise ConfigError(f"interface.heal_time = {st.law.heal_time!r}: {n_heal:.4g} steps of dt, more than a float32 "
-                          f"state counts exactly (2^24); accepted: interface.heal_time < {hi:.4g} l/c_r, or "
+                          f"state counts exactly (2^24); accepted: interface.heal_time <= {hi:.4g} l/c_r, or "
                           f"time.precision = 'float64'")
     if st.scene["drive.mode"] == "none":
         return
