@@ -27,7 +27,9 @@ from mpi4py import MPI  # noqa: E402
 
 from ...engine import loop as L  # noqa: E402
 from ...engine.simulation import Simulation  # noqa: E402
+from ...errors import ConfigError  # noqa: E402
 from ...io.output import Output  # noqa: E402
+from ...parallel import collective  # noqa: E402
 from ...scene.derive import derive  # noqa: E402
 from ...scene.load import load  # noqa: E402
 
@@ -68,6 +70,15 @@ class _TimedWriter:
         self.out.snapshot(*a)
 
 
+def _scratch_folder() -> str:
+    """A new folder for the case's output file, or a ConfigError every rank raises (``collective.decide``)."""
+    try:
+        return tempfile.mkdtemp(prefix="parslip-bench-")
+    except OSError as e:
+        raise ConfigError(f"TMPDIR {tempfile.gettempdir()!r}: cannot make a scratch folder there ({e}); "
+                          f"accepted: a writable folder") from None
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--l", type=int, default=100)
@@ -81,7 +92,7 @@ def main():
     extra = [(k, json.loads(v)) for k, v in (s.split("=", 1) for s in a.set)]
     t = time.perf_counter()
     sc = scene_at(a.l, a.mode, a.precision, extra)
-    st = comm.bcast(derive(sc) if rank == 0 else None)
+    st = collective.decide(comm, lambda: derive(sc))
     t_derive = time.perf_counter() - t
     t = time.perf_counter()
     sim = Simulation(st, comm)
@@ -89,7 +100,7 @@ def main():
     t = time.perf_counter()
     sim.run(until=1)                          # loads (or compiles) the compiled loop
     t_first = time.perf_counter() - t
-    tmp = comm.bcast(tempfile.mkdtemp(prefix="parslip-bench-") if rank == 0 else None)
+    tmp = collective.decide(comm, _scratch_folder)
     out = Output(os.path.join(tmp, "bench.vtkhdf"), sim.output_spec(), comm)
     writer = _TimedWriter(out)
     n_nodes = st.lattice.n_nodes
