@@ -212,12 +212,15 @@ def reference_run(directory, scene: dict, *sets: str):
 
 
 def datasets(path) -> tuple[dict, dict]:
-    """Every dataset of an HDF5 file by name, and its root attributes."""
+    """Every dataset of an HDF5 file by name, and its root attributes (with the status, as text)."""
     import h5py
+
+    from parslip.io.contract import STATUS, read_status
     out = {}
     with h5py.File(path, "r") as f:
         f.visititems(lambda name, obj: out.__setitem__(name, obj[...]) if isinstance(obj, h5py.Dataset) else None)
         attrs = dict(f.attrs)
+        attrs[STATUS] = read_status(f)
     return out, attrs
 
 

@@ -14,6 +14,7 @@ import pytest
 
 from helpers import SMALL, WRITERS, datasets, require, run_cli, scene, small_toml
 from parslip.engine.simulation import Simulation
+from parslip.io.contract import read_status
 from parslip.model.lattice import Lattice
 from parslip.parallel.exchange import build_plan
 from parslip.parallel.halo_mpi import mpi_complete, mpi_post
@@ -221,4 +222,4 @@ def test_slip_beyond_the_halo_stops_the_run(tmp_path):
     assert p.returncode == 3, p.stderr
     assert "interface.slip_reach" in p.stderr and "Traceback" not in p.stderr
     with h5py.File(out, "r") as f:
-        assert f.attrs["status"].startswith("failed: interface slip reached")
+        assert read_status(f).startswith("failed: interface slip reached")

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from helpers import datasets, reference_run, run_cli
+from parslip.io.contract import read_status
 
 # SMALL with a checkpoint every 1 l/c_r (about 300 steps).
 CKPT = {"checkpoint.every": 1.0, "output.snapshots": 4}
@@ -48,7 +49,7 @@ def test_killed_mid_checkpoint_then_restarted_is_bitwise_the_uninterrupted_run(t
         assert f.attrs["complete"] == 1
         step = int(f.attrs["step"])
     with h5py.File(out, "r") as f:
-        assert f.attrs["status"] == "running"               # killed: nobody closed it
+        assert read_status(f) == "running"               # killed: nobody closed it
     p = run_cli(n_then, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", ckpt)
     assert p.returncode == 0, p.stderr
     got, attrs = datasets(out)
@@ -81,7 +82,7 @@ def test_stop_after_writes_a_checkpoint_and_says_how_to_continue(tmp_path, unint
     assert p.returncode == 0, p.stderr
     assert "checkpointed at step" in p.stderr and f"--restart {out}.ckpt.h5" in p.stderr
     with h5py.File(out, "r") as f:
-        assert f.attrs["status"].startswith("checkpointed at step")
+        assert read_status(f).startswith("checkpointed at step")
     p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", "auto")
     assert p.returncode == 0, p.stderr
     _assert_same(datasets(out)[0], ref)

@@ -19,6 +19,7 @@ import h5py
 import pytest
 
 from helpers import REPO, WHEEL_MPIEXEC, cli_env, datasets, require, small_toml
+from parslip.io.contract import read_status
 
 SLURM = REPO / "slurm"
 STANDIN = REPO / "tests" / "slurm_standin"
@@ -84,7 +85,7 @@ def cluster(tmp_path, batch_numba_cache):
 
 def _status(path):
     with h5py.File(path, "r") as f:
-        return f.attrs["status"], int(f.attrs["n_ranks"])
+        return read_status(f), int(f.attrs["n_ranks"])
 
 
 def _v0(path):

@@ -18,6 +18,7 @@ import pytest
 import parslip
 from helpers import cli_env, datasets, small_toml
 from parslip.cli import main
+from parslip.io.contract import put_status, read_status
 from parslip.studies import sweep as S
 
 TINY = {"drive.duration": 3.0, "output.snapshots": 0}
@@ -168,7 +169,7 @@ def test_sweep_runs_every_point_records_failures_and_writes_the_table(here, caps
         nf = by[(mode, 1.0, 0.2)]
         assert nf["status"].startswith("failed: state grew without bound: at step") and "node" in nf["status"]
         with h5py.File(here / "out" / nf["out"], "r") as f:
-            assert f.attrs["status"].startswith("failed: state grew without bound")
+            assert read_status(f).startswith("failed: state grew without bound")
     assert "Traceback" not in cap.err
     # The typed table: the same rows, numbers as numbers, through xarray and pandas.
     xr = pytest.importorskip("xarray")
@@ -243,7 +244,7 @@ def test_a_point_left_running_by_a_job_the_watchdog_ended_is_failed_on_resume(he
     p0 = sw.points[0]
     S.write_record("out", p0, {"status": "running"})
     with h5py.File(S.out_path("out", p0), "w") as f:
-        f.attrs["status"] = "failed: watchdog: rank 1 stopped answering at step 3000"
+        put_status(f, "failed: watchdog: rank 1 stopped answering at step 3000")
     todo, notes = S.triage(sw, "out")
     assert [p.name for p in todo] == ["p001"]
     assert notes == ["p000: failed: watchdog: rank 1 stopped answering at step 3000 (the job ended under it); "
@@ -328,7 +329,7 @@ def test_two_ranks_one_point_each_and_two_ranks_per_point(here):
         for k in range(4):
             f = here / out / "points" / f"p{k:03d}.vtkhdf"
             with h5py.File(f, "r") as h:
-                assert int(h.attrs["n_ranks"]) == rpp and h.attrs["status"] == "complete"
+                assert int(h.attrs["n_ranks"]) == rpp and read_status(h) == "complete"
             got, want = datasets(f)[0], datasets(here / "o1" / "points" / f"p{k:03d}.vtkhdf")[0]
             for name in want:
                 if name.startswith("interface/"):

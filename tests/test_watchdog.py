@@ -15,6 +15,7 @@ import h5py
 import pytest
 
 from helpers import WRITERS, cli_command, cli_env, ranks_below, require, run_cli, small_toml
+from parslip.io.contract import read_status
 
 from conftest import LONG
 HOOKS = "PARSLIP_TEST_HOOKS"
@@ -29,7 +30,7 @@ def _status(out, wait_s=10.0) -> str:
     while True:
         try:
             with h5py.File(out, "r") as f:
-                s = str(f.attrs["status"])
+                s = read_status(f)
                 assert int(f["interface"].attrs["frames_written"]) >= 0
         except OSError:
             s = "unreadable"
@@ -169,8 +170,9 @@ def _held_run(cmd, hook: str, held, act, timeout: float = 90):
 def test_a_real_full_disk_mid_run(tmp_path, long_scene, tiny_disk):
     """The disk fills up while the run writes (another file takes the rest of it): one line, exit 3,
     no traceback, no crash.  The run is held by the test hook at frame 32 until the disk is full, so the
-    test does not race the run on a fast host.  Afterwards the file reads back the frames it says it holds
-    (parslip.open and parslip fronts), or says in one line why it cannot."""
+    test does not race the run on a fast host.  Afterwards the file's status says the run failed and why
+    (the line's reason), and the file reads back the frames it says it holds (parslip.open and parslip
+    fronts), or says in one line why it cannot."""
     require("gather")
     out = tiny_disk / "o.vtkhdf"
     scene = tmp_path / "s.toml"
@@ -194,6 +196,9 @@ def test_a_real_full_disk_mid_run(tmp_path, long_scene, tiny_disk):
     failed = [ln for ln in err.splitlines() if ln.startswith("parslip: run failed:")]
     assert len(failed) == 1 and "No space left on device" in failed[0], err[-3000:]
     (tiny_disk / "filler").unlink()
+    status = _status(out)
+    assert status.startswith(f"failed: cannot write {out}") and "No space left on device" in status, status
+    assert status[len("failed: "):] in failed[0], (status, failed[0])       # the reason the line gives
     _reads_back_what_it_says(out, failed[0])
 
 

@@ -36,8 +36,10 @@ The writer (``io.output``) creates exactly these datasets and the readers
     attributes: events_written (how many are valid), site_column0 (the substrate column facing site 0:
     at the start every site s is bonded to column site_column0 + s)
   /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots
-  root attributes                              resolved scene (TOML), provenance, derived constants, status,
-                                               and the run's timings (``TIMINGS``, named timing_<name>)
+  /status             string (4096 bytes)      "running", "complete", "checkpointed at step N", "interrupted
+                                               at step N" or "failed: REASON" (``STATUS``, ``read_status``)
+  root attributes                              resolved scene (TOML), provenance, derived constants, and the
+                                               run's timings (``TIMINGS``, named timing_<name>)
 
 A frame at drive step k records the displacements u(k) and the bond state as
 it entered that step; the events of step k come after it.  Replaying the
@@ -190,6 +192,52 @@ def check_run_file(path: str, what: str = "RUN") -> None:
                           f"accepted: {accepted}")
 
 
+# The run's status: "running", "complete", "checkpointed at step N", "interrupted at step N" or "failed: REASON",
+# in the dataset /status: one fixed-length UTF-8 string of STATUS_BYTES, NUL-padded, stored contiguously and
+# written whole when the file is made.  Its bytes keep their place in the file, so the writer sets its last
+# value by rewriting them there after HDF5 has closed the file (``io.output``): a full disk, which can leave
+# HDF5 unable to write anything more, still lets the file say that the run failed and why.  Files written
+# before it hold the status as a root attribute; ``read_status`` reads either, ``read_attrs`` gives it as the
+# attribute "status".
+STATUS = "status"
+STATUS_BYTES = 4096
+
+
+def status_value(text: str) -> np.ndarray:
+    """``text`` as the /status value: UTF-8, cut to STATUS_BYTES bytes (with "..." where cut), NUL-padded."""
+    import h5py
+
+    raw = text.encode("utf-8")
+    if len(raw) > STATUS_BYTES:
+        raw = raw[:STATUS_BYTES - 3].decode("utf-8", errors="ignore").encode("utf-8") + b"..."
+    return np.array(raw, dtype=h5py.string_dtype("utf-8", STATUS_BYTES))
+
+
+def status_text(value) -> str:
+    """A stored status as text, its padding dropped ('' for None)."""
+    if value is None:
+        return ""
+    if isinstance(value, (bytes, np.ndarray)):
+        return bytes(value).rstrip(b"\0").decode("utf-8", errors="replace")
+    return str(value)
+
+
+def read_status(f) -> str:
+    """The run's status from an open h5py File: /status, or the root attribute of an older file ('' if none)."""
+    return status_text(f[STATUS][()] if STATUS in f else f.attrs.get(STATUS))
+
+
+def put_status(f, text: str) -> None:
+    """Set the status through HDF5 (collective under mpio): /status rewritten in place, or made (contiguous,
+    allocated and written whole) in a file that has none, an older file's attribute removed."""
+    if STATUS in f:
+        f[STATUS][()] = status_value(text)
+        return
+    f.create_dataset(STATUS, data=status_value(text))
+    if STATUS in f.attrs:
+        del f.attrs[STATUS]
+
+
 def read_attrs(path: str) -> dict:
     """Root attributes (resolved scene TOML, provenance, derived constants) as plain Python values."""
     import h5py
@@ -204,7 +252,10 @@ def read_attrs(path: str) -> dict:
         return v
 
     with h5py.File(path, "r") as f:
-        return {k: plain(v) for k, v in f.attrs.items()}
+        out = {k: plain(v) for k, v in f.attrs.items()}
+        if STATUS in f:
+            out[STATUS] = read_status(f)
+        return out
 
 
 def read_snapshot_times(path: str) -> np.ndarray:

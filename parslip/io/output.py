@@ -25,7 +25,8 @@ from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from .contract import EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, TIMING_PREFIX
+from .contract import (EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, STATUS, TIMING_PREFIX,
+                       put_status, status_value)
 from .scenefile import to_toml
 
 VTK_LINE = 3
@@ -144,6 +145,7 @@ class Output:
         self.frames_safe = 0               # frames on disk: frames_written at the last successful flush
         self._frames_set = 0               # frames_written as last set (on disk at the next flush)
         self._held = False                 # the test hook hold_at_frame has held this run once
+        self._status_at = None             # where /status's bytes are in the file (``_status_on_disk``)
         st, lat = spec.setup, spec.setup.lattice
         self.rank = spec.rank
         self.size = spec.size
@@ -296,7 +298,8 @@ class Output:
             a[k] = v
         a["parslip_version"] = __version__
         a.setdefault("git_commit", "unknown")
-        a["status"] = "running"
+        put_status(f, "running")
+        self._status_at = f[STATUS].id.get_offset()
         a["hdf5_mode"] = self.mode
         a["n_ranks"] = self.size
         a["n_nodes"] = N
@@ -451,7 +454,8 @@ class Output:
                     if name != "Steps/Values":
                         f["VTKHDF"][name].resize(shape[0], axis=0)
                 self._step_constants(old, self.spec.snapshots_total)
-            f.attrs["status"] = "running"
+            put_status(f, "running")
+            self._status_at = f[STATUS].id.get_offset()
             f.attrs["scene"] = to_toml(st.scene)
             f.attrs["n_ranks"] = self.size
 
@@ -617,22 +621,25 @@ class Output:
         "failed: REASON", flushed.  Not collective; False when this rank does not hold the file alone."""
         if self.f is None or self.mode == "mpio":
             return False
-        try:
-            self.f.attrs["status"] = f"failed: {reason}"
-            self.f.flush()
-            return True
-        except Exception:                               # noqa: BLE001 - a best effort before an abort
+        if not self._status_on_disk(f"failed: {reason}"):
             return False
+        try:
+            self.f.flush()                              # the rest, as far as it goes
+        except Exception:                               # noqa: BLE001 - a best effort before an abort
+            pass
+        return True
 
     def close(self, status: str = "complete"):
-        """Set the status and close (collective).  A close that fails (HDF5 writes what it still holds)
-        is a WriteError on every rank; after an earlier failure it closes as best it can, quietly."""
+        """Close, then set the status (collective).  A close that fails (HDF5 writes what it still holds)
+        is a WriteError on every rank, the status "failed: " and why; after an earlier failure it closes as
+        best it can, quietly, and the status is ``status`` (the caller's "failed: REASON")."""
         err = None
         if self.f is not None:
             f, self.f = self.f, None
             # Close the file first: it closes every object in it, so the handles freed next write nothing.
             try:
-                f.attrs["status"] = status
+                if self._status_at is None:         # nowhere known to write it after the close: before it
+                    put_status(f, status)
                 f.close()
             except (OSError, RuntimeError) as e:
                 err = _hdf5_error_line(e)
@@ -647,7 +654,27 @@ class Output:
             sys.unraisablehook, self._prev_unraisable = self._prev_unraisable, None
         if err and self._error is None:
             self._error = ("(closing the file)", err)
+            status = f"failed: cannot write {self.path} ({err}; closing the file)"
+        self._status_on_disk(status)
         self._agree_write()
+
+    def _status_on_disk(self, status: str) -> bool:
+        """Rank 0: write ``status`` over /status's bytes in the file, directly (no HDF5) and synced: they were
+        written whole when the file was made, so this needs no new space and changes nothing else, and HDF5
+        holds no newer copy of them.  Done once HDF5 has closed the file, or failed to; False when it cannot
+        be done (no such bytes known, or the write failed)."""
+        if self._status_at is None or self.rank != 0:
+            return False
+        try:
+            fd = os.open(self.path, os.O_WRONLY)
+            try:
+                os.pwrite(fd, status_value(status).tobytes(), self._status_at)
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+            return True
+        except OSError:
+            return False
 
 
 def _hdf5_error_line(e: BaseException) -> str:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from ..errors import ConfigError
 from . import checkpoint as ck
+from .contract import read_status
 
 
 @dataclass(frozen=True)
@@ -69,7 +70,7 @@ def plan_run(scene: dict, out: str, *, restart: str | None = None, overwrite: bo
         if os.path.exists(out):
             try:
                 with h5py.File(out, "r") as f:
-                    if str(f.attrs.get("status", "")) == "complete":
+                    if read_status(f) == "complete":
                         return RunPlan("done", out)
             except OSError:
                 pass

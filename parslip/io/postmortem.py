@@ -32,13 +32,15 @@ def mark_failed_later(path: str, reason: str, wait_s: float = WAIT_S) -> None:
 def mark_failed(path: str, reason: str, wait_s: float = WAIT_S) -> bool:
     """Set status "failed: REASON" once the file can be opened for writing; True when it was set."""
     import h5py
+
+    from .contract import put_status, read_status
     deadline = time.monotonic() + wait_s
     time.sleep(FIRST_TRY_S)
     while True:
         try:
             with h5py.File(path, "r+") as f:
-                if str(f.attrs.get("status", "")) == "running":
-                    f.attrs["status"] = f"failed: {reason}"
+                if read_status(f) == "running":
+                    put_status(f, f"failed: {reason}")
                 return True
         except (OSError, KeyError):
             if time.monotonic() > deadline:

@@ -262,9 +262,11 @@ def write_record(outdir: str, p: Point, rec: dict) -> None:
 def _file_status(out: str) -> str | None:
     """The output file's status attribute, None when there is no readable file."""
     import h5py
+
+    from ..io.contract import read_status
     try:
         with h5py.File(out, "r") as f:
-            return str(f.attrs.get("status", ""))
+            return read_status(f)
     except (OSError, KeyError):
         return None
 
