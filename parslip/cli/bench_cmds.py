@@ -23,7 +23,7 @@ def register(sub) -> None:
     b.add_argument("--sweep", action="store_true",
                    help="instead: time an 8-point sweep of the push scene on 1 rank and on 2 (one point per rank), "
                         "warm cache, --repeat times; prints the medians and their ratio "
-                        "(parslip.studies.sweep_bench; target <= 0.55)")
+                        "(parslip.studies.bench.sweep_throughput; target <= 0.55)")
     b.add_argument("--repeat", type=int, default=3, help="with --sweep: repeats of each rank count (default 3)")
     b.set_defaults(func=cmd_bench)
 
@@ -35,11 +35,11 @@ def cmd_bench(args) -> int:
     if args.scaling:
         return _scaling(args)
     if args.sweep:
-        from ..studies import sweep_bench
-        res = sweep_bench.measure(repeat=args.repeat, log=lambda m: print(m, file=sys.stderr, flush=True))
+        from ..studies.bench import sweep_throughput
+        res = sweep_throughput.measure(repeat=args.repeat, log=lambda m: print(m, file=sys.stderr, flush=True))
         with open(args.json, "w") as f:
             json.dump(res, f, indent=1)
-        print(sweep_bench.report(res))
+        print(sweep_throughput.report(res))
         print(f"\n(written to {args.json})")
         return 0
     args.ranks = args.ranks or [1, 2]

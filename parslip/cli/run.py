@@ -48,7 +48,7 @@ def cmd_run(args, comm) -> int:
     import parslip
     from ..engine.progress import setup_logging
     from ..engine.runner import continue_command
-    from ..io.plan import default_out
+    from ..io.run_files import default_out
 
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     log = setup_logging(rank, size)

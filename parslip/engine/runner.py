@@ -175,7 +175,7 @@ class Job:
     # ------------------------------------------------------------------ prepare --
     def prepare(self, out, restart, overwrite, progress, stop_after, watchdog) -> bool:
         """Everything before the first step; False when the output is complete already."""
-        from ..io.plan import plan_run
+        from ..io.run_files import plan_run
         hooks.check()
         ranks = self.ranks
         self.sc = sc = ranks.decide(lambda: _load(self.scene, self.sets))
@@ -385,7 +385,7 @@ def _load(scene, sets):
 
 def _output_path(scene, out) -> str:
     """``out``, or the default beside a scene file; a scene given as a mapping must name its output."""
-    from ..io.plan import default_out
+    from ..io.run_files import default_out
     if out is None:
         if not isinstance(scene, (str, os.PathLike)):
             raise ConfigError("out = None: a scene given as a mapping needs an output path; accepted: out='FILE'")

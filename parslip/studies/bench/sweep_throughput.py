@@ -21,7 +21,7 @@ repeat, the CPU time the commands used (a 2-rank run that got both cores uses
 about twice its wall time), and the machine's load average before each run.
 
     parslip bench --sweep                 # 8 points, 3 repeats
-    python -m parslip.studies.sweep_bench --points 8 --repeat 5 --json sweep_bench.json
+    python -m parslip.studies.bench.sweep_throughput --points 8 --repeat 5 --json sweep_throughput.json
 """
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ def _point_walls(outdir: str) -> list[float]:
 def measure(points: int = 8, repeat: int = 3, scene: str | None = None, duration: float = 100.0,
             log=None) -> dict:
     """Time the sweep on 1 and 2 ranks ``repeat`` times each; returns every measurement and the medians."""
-    from ..parallel.launcher import python_command
+    from ...parallel.launcher import python_command
     log = log or (lambda m: print(m, file=sys.stderr, flush=True))
     scene = scene or os.path.join(_root(), "run", "push.toml")
     env = dict(os.environ)
@@ -120,7 +120,7 @@ def report(res: dict) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m parslip.studies.sweep_bench", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m parslip.studies.bench.sweep_throughput", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--points", type=int, default=8)
     ap.add_argument("--repeat", type=int, default=3)
