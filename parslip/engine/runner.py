@@ -90,7 +90,7 @@ class _Ranks:
 
 
 def _provenance(scene, command, run_id) -> dict:
-    from ..io.output import git_commit
+    from ..version import git_commit
     import platform
 
     import numba
