@@ -3,8 +3,9 @@
     model < parallel < io < scene < engine < analysis < studies < cli
 
 with ``errors`` and ``hooks`` below them all and ``parslip/__init__.py`` (the facade) above.  A module
-imports only its own layer or lower ones (at module level or inside a function alike; and analysis, which
-reads run files, never the engine), never a private
+imports only its own layer or lower ones (at module level or inside a function alike, and through
+``importlib.import_module`` with a name the source states; and analysis, which reads run files, never the
+engine), never a private
 name (``_x``) of another subpackage, and the imports have no cycle (those inside a function included).  There is one scene
 loader: only ``scene.load`` reads a scene file and applies overrides.  Each check is also run on a
 drawn package that breaks it, so it can fail.
@@ -55,7 +56,44 @@ def imports(name: str, path: Path, tree) -> list:
         elif isinstance(node, ast.Import):
             for a in node.names:
                 found.append((a.name, None, level))
+    found += [(mod, None, False) for mod in loaded_by_name(tree)]
     return [f for f in found if f[0].split(".")[0] == PACKAGE.name]
+
+
+def _strings(node):
+    """The strings of a string constant, or of a tuple or list of them; None for anything else."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return [node.value]
+    if isinstance(node, (ast.Tuple, ast.List)) and all(isinstance(e, ast.Constant) and isinstance(e.value, str)
+                                                       for e in node.elts):
+        return [e.value for e in node.elts]
+    return None
+
+
+def loaded_by_name(tree) -> list[str]:
+    """The modules ``importlib.import_module(NAME)`` loads where the source states NAME: a string constant, a
+    module-level name bound to a tuple or list of them, or a for-loop variable over either (a plugin list).
+    A name only known when the code runs (a function's argument) is not followed."""
+    known = {}
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+            if _strings(node.value) is not None:
+                known[node.targets[0].id] = _strings(node.value)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.For) and isinstance(node.target, ast.Name):
+            it = known.get(node.iter.id) if isinstance(node.iter, ast.Name) else _strings(node.iter)
+            if it is not None:
+                known[node.target.id] = it
+    found = []
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Call) and node.args):
+            continue
+        f = node.func
+        if (isinstance(f, ast.Attribute) and f.attr == "import_module" and isinstance(f.value, ast.Name)
+                and f.value.id == "importlib") or (isinstance(f, ast.Name) and f.id == "import_module"):
+            arg = node.args[0]
+            found += _strings(arg) or (known.get(arg.id, []) if isinstance(arg, ast.Name) else [])
+    return found
 
 
 def rank(mod: str):
@@ -140,6 +178,11 @@ def test_every_layer_exists_and_nothing_else_does():
     ({"cli/a.py": "from ..io.b import _private\n", "io/b.py": ""}, "private"),
     ({"io/a.py": "from . import b\n", "io/b.py": "from . import a\n"}, "import cycle"),
     ({"io/a.py": "from . import b\n", "io/b.py": "def f():\n    from . import a\n"}, "import cycle"),
+    ({"model/a.py": "import importlib\nimportlib.import_module('parslip.engine.b')\n", "engine/b.py": ""},
+     "an upper layer"),
+    ({"cli/a.py": "import importlib\nMODS = ('parslip.cli.b',)\n\n\ndef f():\n    for m in MODS:\n"
+                  "        importlib.import_module(m)\n", "cli/b.py": "def g():\n    from .a import MODS\n"},
+     "import cycle"),
     ({"extra/a.py": ""}, "in no layer"),
     ({"cli/a.py": "from ..scene.load import resolve\nresolve({})\n", "scene/load.py": ""}, "reads a scene itself"),
 ])

@@ -17,11 +17,7 @@ import importlib
 import sys
 
 from ..errors import EXIT_BAD_INPUT, ConfigError
-
-UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_r of the top
-block (or c_s with material.velocity_unit = "c_s"); scene times, like the
-output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
-`parslip keys` lists every scene key with its default, units and range."""
+from .scene_cmds import UNITS_HELP
 
 
 # Further subcommands live in their own modules: each has ``register(sub)``,

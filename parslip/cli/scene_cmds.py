@@ -7,9 +7,14 @@ from __future__ import annotations
 
 import argparse
 
+# The units every scene and output is in, as the help of ``parslip``, ``run`` and ``info`` gives them.
+UNITS_HELP = """units: a = 1 (lattice spacing), node mass = 1, velocities in c_r of the top
+block (or c_s with material.velocity_unit = "c_s"); scene times, like the
+output's, are in l/c_r with l = top_cols * a the contact length; v0 is in c_r.
+`parslip keys` lists every scene key with its default, units and range."""
+
 
 def register(sub) -> None:
-    from .main import UNITS_HELP
     i = sub.add_parser("info", help="derived quantities, cost, memory, output size, what is left out, warnings",
                        epilog=UNITS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     i.add_argument("scene")
