@@ -19,8 +19,7 @@ from parslip.analysis import rupture, table
 from parslip.analysis.figures import pyplot, save
 from parslip.analysis.friction import slip_events
 from parslip.analysis.results import Run
-
-FORM = 2
+from parslip.io.contract import EVENT_FORM as FORM
 
 
 def points(d: str, study: str):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from parslip.engine.reference import Simulation as ReferenceSimulation
+from parslip.engine.reference_engine import Simulation as ReferenceSimulation
 from parslip.engine.simulation import Simulation
 from parslip.model.lattice import TOP
 from parslip.scene.derive import derive

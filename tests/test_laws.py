@@ -202,7 +202,7 @@ def test_bad_interface_laws_get_one_line_and_exit_2(tmp_path, capsys, setting, m
 
 
 def test_the_reference_engine_refuses_laws_it_does_not_have():
-    from parslip.engine.reference import Simulation as Reference
+    from parslip.engine.reference_engine import Simulation as Reference
     for sets in ({"interface.heal_time": 0.5}, {"interface.patch": STRONG}):
         with pytest.raises(NotImplementedError, match="interface"):
             Reference(derive(scene(**SMALL, **sets)))

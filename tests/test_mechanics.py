@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from helpers import SMALL, reference, scene, simulation
-from parslip.engine.kernels import reference as ref_kernels
+from parslip.engine.kernels import per_bond as ref_kernels
 from parslip.engine.simulation import Simulation
 from parslip.errors import ConfigError, NonFiniteError
 from parslip.model.lattice import BOTTOM, FIXED, TOP

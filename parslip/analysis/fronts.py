@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..io.contract import read_interface
+from ..io.contract import EVENT_BREAK, read_interface
 
 # l/c_r: the longest pause of a tip whose bond re-attached before it moved on, for its front to stay one
 # front (the detector's patience); the default of every function that groups breaks into fronts.
@@ -387,8 +387,6 @@ def resolution_lines(fr: list[Front]) -> list[str]:
 # interval.  The grouping is ``chains``' rule applied step by step: the sites that break in one step form
 # contiguous runs, and a run extends a chain when it covers the site just beyond its tip and the chain is
 # alive (its tip bond still broken when the step began, or its last advance at most ``max_gap`` ago).
-
-EVENT_BREAK = 1
 
 
 def _event_chains(ev: dict, n_sites: int, max_gap: float) -> tuple[list[_Chain], dict, dict]:

@@ -48,6 +48,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from ..model.drive import DRIVE_SPRING, DRIVE_X, DRIVE_XY  # noqa: F401  (the drive word's bits, ``model.drive``)
 from ..parallel.exchange import complete, post, progress, reduce_max
 from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, NO_DOWN, NODES, PAD, ROWS
 from .kernels import interface as ik
@@ -88,8 +89,6 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
                               "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt")
 
-DRIVE_X, DRIVE_XY = 1, 2
-DRIVE_SPRING = 8
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
 # Other steps skip it: a store per driven node, 3 % of a small shear step.

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
-from ..model.interface import BOND_ROWS
+from ..model.interface import BONDS
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
@@ -23,7 +23,7 @@ from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
-from .kernels.scheme import ramp_share, verlet_constant
+from .kernels.scheme import ramp_share
 from ..scene.memory import CHECK_EVERY, event_room, frame_buffer
 from .state import State
 
@@ -38,7 +38,7 @@ class Simulation:
         rank, size = (comm.Get_rank(), comm.Get_size()) if self.comm else (0, 1)
         self.rank, self.size = rank, size
         sc = st.scene
-        self.layout = build_layout(st.lattice, rank, size, st.reach, sc["drive.mode"])
+        self.layout = build_layout(st.lattice, rank, size, st.reach, st.drive.mode)
         self.dtype = np.dtype(dtype or st.dtype)
         lat = st.lattice
         # The frame buffer holds the same number of frames on every rank: sized from the largest slab's site
@@ -50,18 +50,15 @@ class Simulation:
         self.state = State(st, self.layout, self.dtype, event_capacity=capacity)
         self.plan = build_plan(self.layout, self.dtype, self.comm)
         self.sched = L.Schedule(tasks=self.layout.tasks, ptr=task_ranges(self.layout.tasks))
-        zeta = sc["time.zeta"]
-        cf = verlet_constant(st.dt, zeta)
+        cf = st.damping.force_factor(st.dt)
         self.params = L.Params(
-            n_ramp=st.n_ramp, n_drive_start=st.n_drive_start,
-            drive=0 if sc["drive.mode"] == "none" else (L.DRIVE_XY if sc["drive.hold"] == "xy" else L.DRIVE_X)
-            | (L.DRIVE_SPRING if sc["drive.spring"] > 0 else 0),
+            n_ramp=st.n_ramp, n_drive_start=st.n_drive_start, drive=st.drive.code,
             frame_every=st.frame_every, n_frames=st.n_frames, frame_offset=0, check_every=CHECK_EVERY,
             has_iface=bool(lat.has_interface), rigid=bool(lat.rigid),
             brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),
             fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
-            cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=bool(zeta > 0),
-            event_limit=self.event_limit, spring=self.dtype.type(sc["drive.spring"]),
+            cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=st.damping.damped,
+            event_limit=self.event_limit, spring=self.dtype.type(st.drive.spring),
             v0dt=self.dtype.type(st.v0 * st.dt))
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
@@ -247,7 +244,7 @@ class Simulation:
             parts.update(s.owned_bonds())
         else:
             parts["site"] = np.zeros(0, np.int64)
-            parts.update({name: np.zeros(0, s.dtype) for name in BOND_ROWS})
+            parts.update({name: np.zeros(0, s.dtype) for name in BONDS.checkpoint})
         return parts
 
     def restore(self, arrays: dict, attrs: dict):
@@ -265,7 +262,7 @@ class Simulation:
         if st.lattice.has_interface:
             sl = s.owned_sites()
             sites = np.arange(sl.stop - sl.start) + s.site0()
-            s.set_owned_bonds({name: arrays[name][sites] for name in BOND_ROWS})
+            s.set_owned_bonds({name: arrays[name][sites] for name in BONDS.checkpoint})
         if self.comm is not None:
             # Both levels: a rule may read u(n - 1) of HALO sites too (the slip velocity).
             from ..parallel.halo_mpi import mpi_complete, mpi_post

@@ -15,22 +15,20 @@ import numpy as np
 from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
-from ..model.interface import BOND_ROWS, KX, KY, PARTNER, X0
+from ..model.interface import BONDS, KX, KY, PARTNER, X0
 from .kernels import interface as ik
-from .kernels.scheme import verlet_constant
 from .loop import Drive, Levels
 
 
-def stiffness_constants(kn: float, kt: float, dt: float, zeta: float) -> np.ndarray:
+def stiffness_constants(kn: float, kt: float, dt: float, damping) -> np.ndarray:
     """[C k_n, C k_t, C A, C B', C C', B] of ``kernels.stencil``: A = (k_n-k_t)/4 + k_t, B' = sqrt(3)(k_n-k_t)/4,
-    C' = 3(k_n-k_t)/4 + k_t, C = dt^2/(1 + zeta dt/2), B = (1 - zeta dt/2)/(1 + zeta dt/2)."""
+    C' = 3(k_n-k_t)/4 + k_t; C and B the damped update's factors (``model.damping.Damping``)."""
     from .kernels.stencil import K_A, K_B, K_C, K_DAMP, K_N, K_SIZE, K_T
     d = kn - kt
-    c = 0.5 * zeta * dt
-    cf = verlet_constant(dt, zeta)
+    cf = damping.force_factor(dt)
     k = np.zeros(K_SIZE)
     k[K_N], k[K_T], k[K_A] = cf * kn, cf * kt, cf * (d / 4 + kt)
-    k[K_B], k[K_C], k[K_DAMP] = cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt), (1.0 - c) / (1.0 + c)
+    k[K_B], k[K_C], k[K_DAMP] = cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt), damping.carry(dt)
     return k
 
 
@@ -75,15 +73,15 @@ class State:
         bl, tl = layout.blocks
 
         self.levels = Levels(*_arena([bl.shape] * 4 + [tl.shape] * 4, dt))
-        zeta = sc["time.zeta"]
-        self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom, setup.dt, zeta),
-                           stiffness_constants(mat.kn_top, mat.kt_top, setup.dt, zeta)], dt)
+        damping = setup.damping
+        self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom, setup.dt, damping),
+                           stiffness_constants(mat.kn_top, mat.kt_top, setup.dt, damping)], dt)
 
         # Interface ------------------------------------------------------------
         wt, wb = tl.width, bl.width
-        # The per-site bond state (``model.interface.BOND_ROWS``): every stored site starts bonded to the
+        # The per-site bond state (``model.interface.BOND_TABLE``): every stored site starts bonded to the
         # substrate site facing it, with x0 = 0.
-        bonds = np.zeros((len(BOND_ROWS), wt), dt)
+        bonds = np.zeros((len(BONDS.names), wt), dt)
         bonds[PARTNER] = -1
         reach = layout.reach
         law = setup.law
@@ -93,7 +91,7 @@ class State:
             # The sites' own constants, from their global index (the same field on every rank).
             sites = np.arange(lo, hi) + tl.base - lat.top.col0
             for name, values in law.site_values(lat.n_top_sites).items():
-                bonds[BOND_ROWS.index(name), lo:hi] = values[sites]
+                bonds[BONDS.names.index(name), lo:hi] = values[sites]
             br = bl.rows - 1
             blo, bhi = bl.j(bl.stored[br])
             bown0, bown1 = bl.j(bl.owned[br])
@@ -121,8 +119,8 @@ class State:
         # Drive -----------------------------------------------------------------
         # The OWNED driven nodes of the top block, in global id order, each with its slot in the drive's
         # force array (``loop.Drive``).
-        d = np.flatnonzero(lat.kinds(self.nodes(), sc["drive.mode"], sc["drive.rows"]) == DRIVEN) \
-            if sc["drive.mode"] != "none" \
+        drive = setup.drive
+        d = np.flatnonzero(lat.kinds(self.nodes(), drive.mode, drive.rows) == DRIVEN) if drive.on \
             else np.zeros(0, np.int64)
         self.driven_gid = self.gid[d]
         index = np.full(tl.shape, -1, np.int64)
@@ -200,17 +198,17 @@ class State:
         return self.iface.bonds[X0, self.owned_sites()].astype(np.float64)
 
     def owned_bonds(self) -> dict:
-        """Every row of the OWNED sites' bond state by name (``model.interface.BOND_ROWS``), copies in the
-        state's float type: what a checkpoint holds."""
+        """The rows a checkpoint holds of the OWNED sites' bond state, by name (``model.interface.BONDS``),
+        copies in the state's float type."""
         s = self.owned_sites()
-        return {name: self.iface.bonds[r, s].copy() for r, name in enumerate(BOND_ROWS)}
+        return {name: self.iface.bonds[BONDS.names.index(name), s].copy() for name in BONDS.checkpoint}
 
     def set_owned_bonds(self, rows: dict):
         """Set the OWNED sites' bond state from rows by name (a checkpoint's); HALO copies follow at the
         next exchange."""
         s = self.owned_sites()
-        for r, name in enumerate(BOND_ROWS):
-            self.iface.bonds[r, s] = rows[name]
+        for name in BONDS.checkpoint:
+            self.iface.bonds[BONDS.names.index(name), s] = rows[name]
 
     def max_top_slip(self, n: int) -> float:
         """max |u_x| of the OWNED top interface sites at step n (a)."""

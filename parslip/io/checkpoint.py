@@ -6,9 +6,10 @@ read it back):
   /u, /u_prev     float [nodes, 2]   displacements u(n) and u(n-1), in a (the state's float type)
   /drive0         float [nodes]      x displacement of each node when the drive started (driven nodes)
   /drive_force    float [nodes]      the x-force the drive applied to each driven node in the last step
-  /partner, /x0   int64, float [sites]  the bond state of every interface site, one dataset per row of
-                                        ``model.interface.BOND_ROWS`` (here: substrate site bonded to,
-                                        -1 broken; rest offset x0), as ``ROW_DTYPES`` says
+  /partner, /x0, ...  [sites]      the bond state of every interface site, one dataset per row the bond
+                                    table saves (``model.interface.BOND_TABLE``: the substrate column bonded
+                                    to, the rest offset x0, the healing candidate and clock, the site's kx,
+                                    ky and delta_b), each in the dtype the table gives
   root attributes  the step n, the resolved scene (TOML), omega_max and dt, the output cursor (frames and
                    snapshots written, bond events written), the bond event counters, the run id shared with the output file,
                    the rank count that wrote it, and ``complete`` = 1, set last.
@@ -27,7 +28,7 @@ import os
 import numpy as np
 
 from ..errors import ConfigError
-from ..model.interface import BOND_ROWS, ROW_DTYPES
+from ..model.interface import BONDS
 
 FORMAT = "parslip checkpoint 3"          # 2: with drive_force; 3: with events_written
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
@@ -35,7 +36,7 @@ SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "outpu
              "interface.slip_reach", "run.watchdog")
 # Datasets by global node id, with their columns (0: one value per node), then one per bond row by site.
 NODE_DATASETS = {"u": 2, "u_prev": 2, "drive0": 0, "drive_force": 0}
-DATASETS = tuple(NODE_DATASETS) + BOND_ROWS
+DATASETS = tuple(NODE_DATASETS) + BONDS.checkpoint
 
 
 def path_for(out: str) -> str:
@@ -119,7 +120,7 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
         raise ConfigError(f"--restart {path!r}: incomplete checkpoint (the writer stopped before finishing); "
                           f"accepted: a complete checkpoint")
     want = {name: (n_nodes, cols) if cols else (n_nodes,) for name, cols in NODE_DATASETS.items()}
-    want.update({name: (n_sites,) for name in BOND_ROWS})
+    want.update({name: (n_sites,) for name in BONDS.checkpoint})
     for name, shape in want.items():
         if shapes.get(name) != shape:
             raise ConfigError(f"--restart {path!r}: dataset /{name} has shape {shapes.get(name)}, this scene needs "
@@ -138,8 +139,8 @@ def write_collective(comm, path: str, parts: dict, attrs: dict, n_nodes: int, n_
     """Collective: every rank's share (``parts``: arrays by global node id "gid" or site index "site",
     from ``Simulation.checkpoint_parts``) gathered on rank 0, which writes them atomically (``write``)."""
     arrays = {name: gather_global(comm, parts["gid"], parts[name], n_nodes) for name in NODE_DATASETS}
-    for name in BOND_ROWS:
-        rows = parts[name] if ROW_DTYPES[name] is None else parts[name].astype(ROW_DTYPES[name])
+    for name in BONDS.checkpoint:
+        rows = parts[name] if BONDS.dtypes[name] is None else parts[name].astype(BONDS.dtypes[name])
         arrays[name] = gather_global(comm, parts["site"], rows, n_sites)
     err = None
     if comm is None or comm.Get_rank() == 0:

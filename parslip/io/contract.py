@@ -31,7 +31,7 @@ The writer (``io.output``) creates exactly these datasets and the readers
       step     int64    the drive step whose update made it (negative before the drive)
       time     float64  its time, l/c_r from the start of the drive, computed as /interface/time is
       site     int32    the global interface site (the index of /interface/x)
-      kind     uint8    1 = break (EVENT_BREAK), 2 = re-formation (EVENT_FORM)
+      kind     uint8    EVENT_BREAK = break, EVENT_FORM = re-formation (numbered in ``model.interface``)
       partner  int32    the substrate column the bond left (break) or joined (re-formation)
     attributes: events_written (how many are valid), site_column0 (the substrate column facing site 0:
     at the start every site s is bonded to column site_column0 + s)
@@ -51,6 +51,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.interface import BOND_TABLE, BONDS, EVENT_KINDS
+from ..model.interface import BREAK as EVENT_BREAK
+from ..model.interface import FORM as EVENT_FORM
+
 INTERFACE = "interface"
 
 # name: (dtype, per-frame?, units)
@@ -69,12 +73,12 @@ INTERFACE_DATASETS = {
 }
 INTERFACE_DATASETS["step"] = (np.int64, False, "drive steps (dt), 0 = the start of the drive")
 INTERFACE_DATASETS["loader"] = (np.float64, False, "l: the loader's (prescribed face's) x-displacement v0 t")
-INTERFACE_DATASETS["kx"] = (np.float64, False, "m c^2/a^2 (each site's bond, as the run used it)")
-INTERFACE_DATASETS["ky"] = (np.float64, False, "m c^2/a^2 (each site's bond, as the run used it)")
-INTERFACE_DATASETS["delta_b"] = (np.float64, False, "a (each site's breaking length, as the run used it)")
+# The bond table's rows written once per site (``model.interface.BOND_TABLE``).
+INTERFACE_DATASETS.update({r.name: (np.float64, False, f"{r.units} ({r.meaning}, each site's as the run used it)")
+                           for r in BOND_TABLE if r.output == "site"})
 # One value per site.
-SITE_DATASETS = ("x", "kx", "ky", "delta_b")
-FRAME_FIELDS = ("intact", "partner", "ux", "uy", "sxy", "syy")
+SITE_DATASETS = ("x",) + BONDS.site_output
+FRAME_FIELDS = ("intact",) + BONDS.frame_output + ("ux", "uy", "sxy", "syy")
 # One value per frame, like ``time``.
 FORCE_DATASETS = ("friction_force", "drive_force", "mu")
 PER_FRAME_1D = ("time", "step", "loader") + FORCE_DATASETS
@@ -85,10 +89,9 @@ EVENT_DATASETS = {
     "step": (np.int64, "drive steps (dt), negative before the drive"),
     "time": (np.float64, "l/c_r from the start of the drive"),
     "site": (np.int32, "global interface site"),
-    "kind": (np.uint8, "1 = break, 2 = re-formation"),
+    "kind": (np.uint8, ", ".join(f"{k} = {name}" for k, name in EVENT_KINDS.items())),
     "partner": (np.int32, "substrate column left (break) or joined (re-formation)"),
 }
-EVENT_BREAK, EVENT_FORM = 1, 2
 
 # The run's timings, root attributes named TIMING_PREFIX + name, in seconds unless said.
 TIMING_PREFIX = "timing_"

@@ -24,8 +24,8 @@ from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from .contract import (EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, STATUS, TIMING_PREFIX,
-                       put_status, status_value)
+from .contract import (EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, STATUS,
+                       TIMING_PREFIX, put_status, status_value)
 from .scenefile import to_toml
 
 VTK_LINE = 3
@@ -318,8 +318,9 @@ class Output:
             self._handles[f"interface/{name}"] = ds
         if self.root:
             g["x"][...] = (np.arange(ns) + 0.5) / ns    # node s stands at the middle of its spacing
-            for name, values in st.law.site_values(ns).items():
-                g[name][...] = values
+            values = st.law.site_values(ns)
+            for name in SITE_DATASETS[1:]:          # after x: the bond table's rows written once per site
+                g[name][...] = values[name]
         ev = self._handles[f"interface/{EVENTS}"] = g.create_group(EVENTS)
         ev.attrs["events_written"] = 0
         ev.attrs["site_column0"] = int(st.lattice.top.col0)
@@ -451,7 +452,7 @@ class Output:
         if self.root:
             st = self.spec.setup
             steps = frames.step[:count] - st.n_drive_start
-            loader = steps * st.dt * st.v0 / st.l if st.scene["drive.mode"] != "none" else np.zeros(count)
+            loader = steps * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count)
 
             def put():
                 self._ds("interface/time")[k0:k0 + count] = times

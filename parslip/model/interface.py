@@ -22,10 +22,11 @@ function in ``engine.kernels.interface``:
              restarts from zero whenever the claim changes or lapses (the site leaves reach, or another
              site takes the bottom site first).  0: at once (the paper)
 
-The per-site bond state is one table of named rows (``BOND_ROWS``) that the
-loop, the halo exchange and the checkpoint share: the exchange sends the
-first ``N_TRAVEL`` rows of every HALO site each step, and a checkpoint
-writes every row by name.  A new field of state is one more row.
+The per-site bond state is one table of named rows (``BOND_TABLE``) that the
+loop, the halo exchange, the checkpoint and the output share: each row says
+whether it travels with the halo exchange, how a checkpoint stores it and
+whether the output writes it, and everything else is derived from the table
+(``BONDS``).  A new field of state is one more line in the table.
 
 Each site may have its own k_x, k_y and delta_b (delta0 stays uniform):
 ``site_values`` starts from the scene's values, applies the seeded random
@@ -74,22 +75,53 @@ REFORM_CODES = {"zero": REFORM_ZERO, "current": REFORM_CURRENT}
 REBOND_CODES = {"nearest": REBOND_NEAREST, "facing": REBOND_FACING}
 HEAL_SPEED, HEAL_TIME = 1, 2
 
-# The per-site bond state, one row each, in the state's float type (integers are exact below 2^24 even in
-# float32).  Rows [0, N_TRAVEL) change as the run goes and travel with the halo exchange:
-#   partner  the substrate column bonded to (-1 broken)
-#   x0       the bond's rest offset (a)
-#   cand     HEAL_TIME: the bottom site the free site has claimed (substrate column), while clock > 0
-#   clock    HEAL_TIME: consecutive steps it has claimed ``cand`` (0: none; at most n_heal + 1)
-# The others are the site's own constants (``site_values``), which every rank computes for the sites it
-# stores from their global index, so they need not travel:
-#   kx, ky   the bond's stiffnesses (m c^2/a^2);  delta_b  its breaking length (a)
-BOND_ROWS = ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b")
-PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B = range(7)
-N_TRAVEL = 4
-SITE_CONSTANTS = ("kx", "ky", "delta_b")
-# How a checkpoint stores each row: partner as int64, the others in the state's float type (None).
-ROW_DTYPES = {"partner": "int64", "x0": None, "cand": "int64", "clock": "int64", "kx": None, "ky": None,
-              "delta_b": None}
+# The per-site bond state: one row per field, each row one value per top interface site, all rows in the
+# state's float type (integers are exact below 2^24 even in float32).  The table below is the one place a
+# row is described; the row indices, what travels with the halo exchange, what a checkpoint holds and in
+# which dtype, and what the output writes are all derived from it.  A row
+#   travels      changes as the run goes, so the exchange sends it for every HALO site each step; a row
+#                that does not travel is a site's own constant, which every rank computes for the sites it
+#                stores from their global index (``InterfaceLaw.site_values``)
+#   checkpoint   the dtype a checkpoint stores it in ("int64"; None: the state's float type), or False
+#   output       "frame": written per interface frame (/interface/<name>, by ``kernels.interface.record``);
+#                "site": written once per site (/interface/<name>, from ``site_values``); None: not written
+BondRow = namedtuple("BondRow", "name travels checkpoint output units meaning")
+BOND_TABLE = (
+    BondRow("partner", True, "int64", "frame", "-", "the substrate column bonded to (-1 broken)"),
+    BondRow("x0", True, None, None, "a", "the bond's rest offset"),
+    BondRow("cand", True, "int64", None, "-", "HEAL_TIME: the bottom site the free site has claimed "
+                                              "(substrate column), while clock > 0"),
+    BondRow("clock", True, "int64", None, "steps", "HEAL_TIME: consecutive steps it has claimed cand "
+                                                   "(0: none; at most n_heal + 1)"),
+    BondRow("kx", False, None, "site", "m c^2/a^2", "the bond's shear stiffness"),
+    BondRow("ky", False, None, "site", "m c^2/a^2", "the bond's normal stiffness"),
+    BondRow("delta_b", False, None, "site", "a", "the bond's breaking length"),
+)
+# What the table implies (``bond_layout``): names (row order), travel (indices of the travelling rows),
+# checkpoint (names a checkpoint holds), dtypes ({name: checkpoint dtype}), frame_output and site_output
+# (names written per frame and per site).
+BondLayout = namedtuple("BondLayout", "names travel checkpoint dtypes frame_output site_output")
+
+
+def bond_layout(table) -> BondLayout:
+    """The row layout a bond table implies (see ``BOND_TABLE``)."""
+    return BondLayout(names=tuple(r.name for r in table),
+                      travel=tuple(i for i, r in enumerate(table) if r.travels),
+                      checkpoint=tuple(r.name for r in table if r.checkpoint is not False),
+                      dtypes={r.name: r.checkpoint for r in table if r.checkpoint is not False},
+                      frame_output=tuple(r.name for r in table if r.output == "frame"),
+                      site_output=tuple(r.name for r in table if r.output == "site"))
+
+
+BONDS = bond_layout(BOND_TABLE)
+BOND_ROWS = BONDS.names
+# The rows the compiled kernels index by name.
+PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B = (BOND_ROWS.index(name) for name in
+                                             ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b"))
+
+# Kinds of a bond event (``/interface/events/kind``): the one place they are numbered.
+BREAK, FORM = 1, 2
+EVENT_KINDS = {BREAK: "break", FORM: "re-formation"}
 
 # What the compiled update reads of the law besides the per-site rows, lengths in the state's float type:
 #   delta0 (a), rebond_length (a), reform, rebond and heal: the rules' codes; heal_du = heal_speed dt (a):
@@ -247,7 +279,7 @@ class InterfaceLaw:
         return sites * self.ky * self.delta0
 
     def unlike_reference(self) -> list[str]:
-        """The rules of this law that the reference implementation (``engine.reference``) does not have, as
+        """The rules of this law that the reference implementation (``engine.reference_engine``) does not have, as
         "key = value" text; empty when it can run the law."""
         out = []
         if self.rebond != REBOND_NEAREST:

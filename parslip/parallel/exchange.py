@@ -15,8 +15,8 @@ numba compiles:
   with more than one rank is used.
 
 What travels is given by ``parallel.layout``: row segments of positions, and
-the travelling rows of the bond table (``model.interface.BOND_ROWS``, the
-first ``N_TRAVEL``) of the block's interface sites.
+the travelling rows of the bond table (``model.interface.BONDS.travel``) of
+the block's interface sites.
 """
 from __future__ import annotations
 

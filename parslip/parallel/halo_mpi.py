@@ -10,7 +10,7 @@ moves the messages while the loop computes; ``mpi_reduce_max`` takes the MAX
 of the loop's flags over all ranks (MPI_Allreduce).  One message per peer
 per step carries every row segment's x then y, then, for each run of
 interface sites, the travelling rows of the bond table
-(``model.interface.BOND_ROWS[:N_TRAVEL]``) one after the other.  The bond
+(``model.interface.BONDS.travel``, ``Plan.travel``) one after the other.  The bond
 table is in the state's float type: integers (partners) are exact below
 2^24 even in float32.
 """
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..model.interface import N_TRAVEL
+from ..model.interface import BONDS
 from ..model.lattice import BOTTOM
 from . import mpi
 from .plans import SEGMENT, SITES, Plan
@@ -56,7 +56,8 @@ def build_plan(layout, dtype, comm=None) -> Plan:
     def sizes(seg, ptr, sseg, sptr):
         out = [0]
         for i in range(len(peers)):
-            n = 2 * int(seg["n"][ptr[i]:ptr[i + 1]].sum()) + N_TRAVEL * int(sseg["n"][sptr[i]:sptr[i + 1]].sum())
+            sites = int(sseg["n"][sptr[i]:sptr[i + 1]].sum())
+            n = 2 * int(seg["n"][ptr[i]:ptr[i + 1]].sum()) + len(BONDS.travel) * sites
             out.append(out[-1] + n)
         return np.array(out, np.int64)
 
@@ -68,7 +69,7 @@ def build_plan(layout, dtype, comm=None) -> Plan:
     return Plan(peer=np.array([p.rank for p in peers], np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,
                 rs=rs, rs_ptr=rs_ptr, rts=rts, rts_ptr=rts_ptr, sbuf=np.zeros(sb_ptr[-1], dtype), sb_ptr=sb_ptr,
                 rbuf=np.zeros(rb_ptr[-1], dtype), rb_ptr=rb_ptr, req=req, status=status, handles=h,
-                rflags=np.zeros(8, np.int64))
+                rflags=np.zeros(8, np.int64), travel=np.array(BONDS.travel, np.int64))
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -105,7 +106,7 @@ def _transfer(plan, i, bx, by, tx, ty, bonds, out):
             k = _move(buf, k, ty, r, j0, n, out)
     for g in range(slo, shi):
         j0, n = sites[g].j0, sites[g].n
-        for row in range(N_TRAVEL):
+        for row in plan.travel:
             k = _move(buf, k, bonds, row, j0, n, out)
 
 

@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass
 
 from ..errors import ConfigError
+from ..model.damping import Damping
+from ..model.drive import Drive
 from ..model.interface import InterfaceLaw
 from ..model.lattice import Lattice
 from ..model.physics import Material
@@ -43,6 +45,8 @@ class Setup:
     reach: Reach             # halo widths that serve the slip reach
     precision: str           # "float64" or "float32"
     law: InterfaceLaw        # the interface bonds: parameters and rules (``model.interface``)
+    drive: Drive             # the loading: mode, speed, phases (``model.drive``)
+    damping: Damping         # zeta and its form (``model.damping``)
 
     @property
     def n_steps(self) -> int:
@@ -102,11 +106,11 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     lat = Lattice(scene["lattice.top_rows"], scene["lattice.top_cols"], scene["lattice.bottom_rows"],
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     law = InterfaceLaw.from_scene(scene)
+    drive = Drive.from_scene(scene)
     big = law.largest(lat.n_top_sites if lat.has_interface else 0)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         big["kx"], big["ky"], scene["drive.spring"], scene["drive.mode"],
-                                         scene["drive.rows"])
+                                         big["kx"], big["ky"], **drive.stability_key())
     else:
         omega, method = omega
     limit = _dt_max(omega)
@@ -116,21 +120,18 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
                           f"(omega_max = {omega:.6g}); accepted: 0 (auto) or 0 < dt < {limit:.6g}")
     l = lat.contact_length
     t_unit = l / mat.c_r
-    n_ramp = int(round(scene["load.ramp"] * t_unit / dt))
-    n_settle = int(round(scene["load.settle"] * t_unit / dt))
-    n_drive = max(1, int(math.ceil(scene["drive.duration"] * t_unit / dt)))
+    n_ramp, n_settle, n_drive = drive.steps(t_unit, dt)
     frame_dt = scene["output.interface_dt"] * t_unit if scene["output.interface_dt"] > 0 else 1.0 / mat.c_r
     frame_every = max(1, int(math.floor(frame_dt / dt + 1e-9)))
     nsnap = scene["output.snapshots"] if scene["output.fields"] == "all" else 0
     snaps = () if nsnap == 0 else tuple(sorted({int(round(j * n_drive / nsnap)) for j in range(nsnap + 1)}))
-    v0 = scene["drive.v0"] * mat.c_r
     reach = scene["interface.slip_reach"]
     if reach == 0:
-        reach = (v0 * scene["drive.duration"] * t_unit if scene["drive.mode"] != "none" else 0.0) + 2.0
+        reach = drive.travel(mat.c_r, t_unit) + 2.0
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
-               n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=v0,
+               n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=drive.speed(mat.c_r),
                slip_reach=reach, reach=interface_reach(law.rebond_length, big["delta_b"], reach),
-               precision=scene["time.precision"], law=law)
+               precision=scene["time.precision"], law=law, drive=drive, damping=Damping.from_scene(scene))
     limits.check_setup(st)
     return st

@@ -34,14 +34,13 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ...model.interface import (CAND, CLOCK, DELTA_B, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER, REBOND_FACING,
-                                REFORM_ZERO, X0)
+from ...model.interface import (BREAK, CAND, CLOCK, DELTA_B, FORM, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER,
+                                REBOND_FACING, REFORM_ZERO, X0)
 from .floats import like
 
-# Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
+# Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).  The kinds of a bond
+# event, BREAK and FORM, are the law's (``model.interface``).
 BREAKS, FORMS = 0, 1
-# Kinds of a bond event (``/interface/events/kind``).
-BREAK, FORM = 1, 2
 
 # The integer geometry of the interface on one rank (local array columns unless said):
 #   tbase, bbase     global column of array column 0 of the block's / the substrate's interface row
@@ -60,7 +59,7 @@ Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0
 Constants = namedtuple("Constants", "drift inv_l traction")
 # The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
 # the substrate's (bottom sites): bonds, the per-site bond state [row, site] with the rows of
-# ``model.interface.BOND_ROWS`` (partner: global substrate column, -1 broken; x0: rest offset; the site's
+# ``model.interface.BOND_TABLE`` (partner: global substrate column, -1 broken; x0: rest offset; the site's
 # own kx, ky, delta_b); rules, the law's scalars and rule codes (``model.interface.Rules``); claim and
 # taken are scratch; ext_x/ext_y and exb_x/exb_y the bond forces on OWNED top and bottom nodes; zeros a
 # row of zeros; counters [BREAKS, FORMS] of OWNED sites; reach[0] the first OWNED site out of the halo's

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from ...engine.reference import Simulation as Reference
+from ...engine.reference_engine import Simulation as Reference
 from ...model.lattice import DIRECTIONS, DRIVEN, FIXED
 
 
@@ -41,10 +41,9 @@ class NumpyStep:
         self.dx0 = ref.ref_x[self.top][:, None] - ref.ref_x[self.bot][None, :]
         self.partner = np.arange(len(self.top)) + setup.lattice.top.col0
         self.x0 = np.zeros(len(self.top))
-        sc, law = setup.scene, setup.law
+        law = setup.law
         self.d0, self.db, self.kx, self.ky = law.delta0, law.delta_b, law.kx, law.ky
-        c = 0.5 * sc["time.zeta"] * setup.dt
-        self.keep, self.inv, self.dt2 = 1 - c, 1 / (1 + c), setup.dt ** 2
+        self.carry, self.cf = setup.damping.carry(setup.dt), setup.damping.force_factor(setup.dt)
 
     def step(self):
         u = self.u
@@ -87,7 +86,7 @@ class NumpyStep:
             np.add.at(f, (t, 1), fy)
             np.add.at(f, (self.bot[q], 0), -fx)
             np.add.at(f, (self.bot[q], 1), -fy)
-        new = (2 * u - self.keep * self.up + self.dt2 * f) * self.inv
+        new = u + (self.carry * (u - self.up) + self.cf * f)
         new[~self.free] = u[~self.free]
         self.up, self.u = u, new
 

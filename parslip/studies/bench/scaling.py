@@ -15,7 +15,7 @@ long as its busiest rank's share:
     S_r  interface sites (top interface nodes) rank r owns: each costs a bond update and the
          re-bonding search on top of its node update,
     H_r  halo values rank r sends plus receives per step: 2 (x and y) per HALO node copy and
-         N_TRAVEL (4: partner, x0, healing candidate and clock) per HALO interface site, as ``parallel.exchange`` packs them,
+         one per travelling bond row (4: partner, x0, healing candidate and clock) per HALO interface site, as ``parallel.exchange`` packs them,
     M_r  messages rank r sends plus receives per step: 2 per peer (one each way),
     c    the fixed cost of a step (loop overhead, flag checks, the exchange's calls).
 
@@ -95,9 +95,9 @@ def _seg_values(segments) -> int:
 
 def _site_values(sites) -> int:
     """Values a list of interface-site ranges carries: the travelling rows of the bond table of each site
-    (``model.interface.N_TRAVEL``: partner, x0, the healing candidate and clock)."""
-    from ...model.interface import N_TRAVEL
-    return sum(N_TRAVEL * (hi - lo) for lo, hi in sites)
+    (``model.interface.BONDS.travel``: partner, x0, the healing candidate and clock)."""
+    from ...model.interface import BONDS
+    return sum(len(BONDS.travel) * (hi - lo) for lo, hi in sites)
 
 
 def _halo_sides(blk, r: int) -> tuple[int, int]:

@@ -2,7 +2,7 @@
 
 Responsible for nothing on the run path.  It holds the whole lattice as one
 array of nodes in global id order, gathers each node's neighbours by index
-and sums each bond's force on its own (``kernels.reference``), then calls
+and sums each bond's force on its own (``kernels.per_bond``), then calls
 Python per step: slow, and easy to read.  The tests compare the compiled
 loop with it step by step, by global id, and use its energy and force
 kernels as an independent computation.
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels import reference as kernels
+from .kernels import per_bond as kernels
 from .kernels.scheme import ramp_share
 from ..errors import NonFiniteError
 from ..model.interface import REFORM_ZERO
@@ -46,10 +46,7 @@ class Simulation:
         s, lat, mat = setup.scene, setup.lattice, setup.material
         if lat.rigid:
             raise NotImplementedError("the reference implementation has no rigid substrate")
-        if s["drive.hold"] != "x" or s["drive.spring"] or s["drive.rows"]:
-            raise NotImplementedError("the reference implementation has only the paper's drive (drive.hold = "
-                                      "'x', drive.spring = 0, drive.rows = [])")
-        unlike = setup.law.unlike_reference()
+        unlike = setup.drive.unlike_reference() + setup.law.unlike_reference()
         if unlike:
             raise NotImplementedError(f"the reference implementation has not {', '.join(unlike)}")
         self.layout = lay = _SerialLayout(lat)
@@ -64,7 +61,7 @@ class Simulation:
         self.react = np.zeros((n_loc, 2))
         self.ref_x = nodes["x"].copy()
         self.block = nodes["block"].astype(np.int8)
-        self.kind = lat.kinds(nodes, s["drive.mode"])
+        self.kind = lat.kinds(nodes, setup.drive.mode)
         self.u_drive0 = np.zeros(n_loc)
         self.fext = np.zeros((n_loc, 2))
         if lat.has_interface:
@@ -101,7 +98,7 @@ class Simulation:
         self.delta0, self.delta_b = law.delta0, law.delta_b
         self.kx, self.ky = law.kx, law.ky
         self.reform_zero = law.reform == REFORM_ZERO
-        self.zeta = s["time.zeta"]
+        self.zeta = setup.damping.zeta
 
     # -------------------------------------------------------------- phases --
     def load_factor(self, n: int) -> float:
@@ -110,7 +107,7 @@ class Simulation:
     def step(self):
         """Advance the state from step n to n+1 (positions u(n) -> u(n+1))."""
         st, n = self.setup, self.n
-        drive_on = n >= st.n_drive_start and st.scene["drive.mode"] != "none"
+        drive_on = n >= st.n_drive_start and st.drive.on
         if n == st.n_drive_start:
             self.u_drive0[:] = self.u[:, 0]
         if len(self.top_node):

@@ -1,4 +1,4 @@
-"""Compiled kernels of one Verlet step, on flat local arrays.
+"""The reference engine's per-bond kernels (``engine.reference_engine``): one Verlet step on flat arrays.
 
 Responsible for the arithmetic only: no MPI, no files.  The caller (the
 engine) alternates these with the halo exchanges.  Every kernel loops over
