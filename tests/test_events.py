@@ -13,6 +13,7 @@ import pytest
 import parslip
 from helpers import SMALL, blank, datasets, require, run_cli, small_toml
 F = importlib.import_module("parslip.analysis.fronts")
+from parslip.analysis.results import Run
 from parslip.io.contract import EVENT_BREAK, EVENT_FORM
 
 MODES = ("push", "pull", "shear")
@@ -128,7 +129,7 @@ def test_a_front_at_a_known_speed_is_measured_to_the_time_step():
     within the step's rounding, while the frames (every 1/50 of the run) cannot resolve it."""
     v, dx = 0.37, 1.0 / L_SITES
     iface = _record([(int(round(s * dx / (v * DT))), s) for s in range(20, 180)])
-    (f,) = F.fronts(iface)
+    (f,) = Run.from_arrays(iface).fronts()
     assert f.direction == 1 and f.resolution == DT and f.fit_sites == 5
     assert f.steady_speed == pytest.approx(v, rel=2e-3)
     assert np.abs(f.tip["v"] - v).max() < 0.02 * v
@@ -151,7 +152,7 @@ def test_supershear_is_flagged_and_a_burst_is_no_speed():
     for s in range(150, 170):
         breaks.append((int(round(t / DT)), s))
         t += dx / 0.5
-    (f,) = F.fronts(_record(breaks))
+    (f,) = Run.from_arrays(_record(breaks)).fronts()
     (ss,) = [b for b in f.supershear if b["sites"][0] <= 120 <= b["sites"][1]]
     assert ss["max_speed"] == pytest.approx(1.5, rel=0.05) and ss["n_sites"] >= 20
     assert f.bursts and all(136 <= b["sites"][0] and b["sites"][1] <= 153 for b in f.bursts)   # fits that hold it
@@ -166,7 +167,7 @@ def test_event_and_frame_catalogues_agree_on_a_real_run(small_run):
     frame of the other; the events' tips never outrun c_l."""
     run = parslip.open(small_run)
     ev_fr = run.fronts()
-    frame_fr = F.fronts({**run.interface, "events": None})
+    frame_fr = F.fronts(Run.from_arrays({**run.interface, "events": None}, run.scene, run.attrs))
     assert len(ev_fr) == len(frame_fr) >= 3
     dt_frame = float(np.median(np.diff(run.times)))
     for a, b in zip(ev_fr, frame_fr):

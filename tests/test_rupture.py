@@ -8,26 +8,27 @@ import pytest
 
 from helpers import DT, NS, blank, draw
 from parslip.analysis import rupture
-from parslip.analysis.fronts import fronts
+from parslip.analysis.results import Run
 
 
 def test_a_front_born_ahead_of_a_running_tip_is_its_daughter():
     it = blank(4 * NS + 40)
     draw(it, 10, 0, +1, 4, 2, 0.001)                 # the mother: a site every 4 frames from x = 0
     draw(it, 30, 30, +1, 1, 2, 0.001, sites=10)      # born at site 30 at frame 30, the mother's tip at site 5
-    fr = fronts(it)
-    d = rupture.daughters(fr)
+    run = Run.from_arrays(it)
+    fr = run.fronts()
+    d = rupture.daughters(run)
     assert len(d) == 1
     mother, daughter = fr[d[0]["mother"]], fr[d[0]["daughter"]]
     assert round(mother.nucleation_time / DT) == 10 and round(daughter.nucleation_time / DT) == 30
     assert d[0]["ahead"] == pytest.approx((30 - 5) / NS)
-    assert rupture.daughters(fr, min_gap=0.5) == []
+    assert rupture.daughters(run, min_gap=0.5) == []
 
 
 def test_a_front_slowed_and_stopped_by_a_patch():
     it = blank(300)
     arr = draw(it, 0, 0, +1, 1, 2, 0.001, sites=int(0.5 * NS))    # one site a frame: 1 site/DT
-    f = fronts(it)[0]
+    f = Run.from_arrays(it).fronts()[0]
     res = rupture.through_patch(f, 0.4, 0.6)
     assert res["through"] is False and math.isnan(res["after"])
     assert res["before"] == pytest.approx(res["inside"]) == pytest.approx((1 / NS) / DT)
@@ -50,7 +51,7 @@ def test_andrews_s_of_a_known_traction_history():
     peak = (1 + (NS - 1) * 2.5) / NS
     for sign in (1.0, -1.0):
         it["sxy"] = sign * sxy
-        f = fronts(it)[0]
-        got = rupture.andrews_s(it, f)
+        run = Run.from_arrays(it)
+        got = rupture.andrews_s(run, run.fronts()[0])
         assert got["S"] == pytest.approx(peak - 1.0) and got["tau_0"] == pytest.approx(1.0)
         assert got["tau_peak"] == pytest.approx(peak) and got["tau_res"] == pytest.approx(0.0)

@@ -1,13 +1,17 @@
-"""Friction observables of a run: mu(t), the static peak mu_s, what each front did, the precursors.
+"""Friction and stick-slip of a run: mu(t), the static peak mu_s, what each front did, the precursors.
 
-Responsible for what the run's friction record says on top of the front
-catalogue (``analysis.fronts``): the friction coefficient mu(t) = -F_T / F_N
-the interface mobilises (``/interface/mu``, recorded with every frame), the
-onset of sliding, the static peak mu_s, the fate of each front (it crossed
-the contact, arrested inside it, left through an edge, or was still running
-when the record ended) and the precursors with their arrest lengths.  The
-one-row digest of all this, ``observables``, is what a sweep's summary
-table holds per point.
+Every measure is a function of the run (``analysis.results.Run``); the catalogue options (``max_gap``,
+``min_sites``, ``window``) pass through to ``run.fronts``.
+
+  mu(run)                        mu(t) = -F_T / F_N per frame (``/interface/mu``)
+  slip_onset(run)                the frame by which every bond had broken once
+  static_peak(run)               mu_s, its time, window and place relative to the first break (``StaticPeak``)
+  fate (per-front field)         what became of a front: crossed, edge, merged, arrested, running
+  arrest_length (per-front field)  the length of contact an arrested front broke, l
+  precursors(run)                the fronts that arrested inside the contact (``Precursor``)
+  slip_events(run, min_drop)     the stick-slip record's drops of mu (``SlipEvent``)
+  observables(run)               the one-row digest a sweep's summary table holds per point
+  summary(run), summary_lines(run), slip_event_lines(events)   the same as text
 
 Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
 
@@ -70,7 +74,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fronts import MAX_GAP, Front, first_break, fronts as front_catalogue, table
+from .fronts import Front, first_break, front_field, json_value, table
 
 EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one site) of an edge has reached it
 
@@ -97,7 +101,7 @@ class StaticPeak:
     force: float                    # F_s = mu_s * F_N, the static friction force
 
     def to_dict(self) -> dict:
-        return {k: _clean(v) for k, v in self.__dict__.items()}
+        return {k: json_value(v) for k, v in self.__dict__.items()}
 
 
 @dataclass
@@ -113,15 +117,7 @@ class Precursor:
     front: Front
 
     def to_dict(self) -> dict:
-        return {k: _clean(v) for k, v in self.__dict__.items() if k != "front"}
-
-
-def _clean(v):
-    if isinstance(v, (np.floating, np.integer)):
-        v = v.item()
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
+        return {k: json_value(v) for k, v in self.__dict__.items() if k != "front"}
 
 
 @dataclass
@@ -141,20 +137,21 @@ class SlipEvent:
     precursor_mu: list              # mu at each one's arrest, F_T/F_N
 
     def to_dict(self) -> dict:
-        return {k: (list(v) if isinstance(v, list) else _clean(v)) for k, v in self.__dict__.items()}
+        return {k: (list(v) if isinstance(v, list) else json_value(v)) for k, v in self.__dict__.items()}
 
 
-def mu(iface: dict) -> np.ndarray:
+def mu(run) -> np.ndarray:
     """mu(t) = -F_T / F_N per frame (``/interface/mu``); NaN for a record written without forces."""
+    iface = run.interface
     if "mu" in iface:
         return np.asarray(iface["mu"], float)
     return np.full(len(iface["t"]), np.nan)
 
 
-def slip_onset(iface: dict) -> int | None:
+def slip_onset(run) -> int | None:
     """The first frame by which every interface bond but the ``edge_sites`` at each end has broken at
     least once, or None."""
-    intact = iface["intact"]
+    intact = run.interface["intact"]
     e = edge_sites(intact.shape[1])
     inner = intact[:, e:intact.shape[1] - e]
     if inner.shape[1] == 0 or inner.shape[0] == 0:
@@ -164,14 +161,16 @@ def slip_onset(iface: dict) -> int | None:
     return int(k[0]) if len(k) else None
 
 
-def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
+def static_peak(run) -> StaticPeak:
     """mu_s, its time and its place relative to the first break (see the module's definitions).
 
-    ``fn`` (F_N, m c^2/a) only scales mu_s into the static friction force F_s; without it F_s is NaN.
+    The run's F_N (``load.FN``, m c^2/a) only scales mu_s into the static friction force F_s; without it
+    F_s is NaN.
     """
+    iface, fn = run.interface, _fn(run)
     t = np.asarray(iface["t"], float)
-    m = mu(iface)
-    ks = slip_onset(iface)
+    m = mu(run)
+    ks = slip_onset(run)
     end = len(t) if ks is None else ks + 1
     window = "record" if ks is None else "slip onset"
     seg = m[:end]
@@ -198,8 +197,23 @@ def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
                       float(force))
 
 
-def fate(front: Front, iface: dict, max_gap: float = MAX_GAP) -> str:
-    """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring)."""
+def _fn(run) -> float | None:
+    """The run's normal load F_N (m c^2/a), None when its scene does not say."""
+    fn = run.scene.get("load.FN")
+    return float(fn) if fn is not None else None
+
+
+@front_field("fate", "-", "the first that holds: crossed (it broke bonds from one edge of the contact to the "
+             "other, or from an edge to where the rest of the contact broke within max_gap of its arrival: another "
+             "front finished the crossing), edge (the same from inside the contact), merged (the bond ahead of its "
+             "tip was broken by another front when it stopped, or within max_gap), arrested (a precursor: its tip "
+             "stopped inside the contact with the bond ahead holding, quiet for longer than max_gap before the "
+             "record ends) or running (the same within max_gap of the record's end: it may still move)",
+             "fate", ">8")
+def fate(run, front: Front) -> str:
+    """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring),
+    judged with the detector's patience the front was found with (``front.max_gap``)."""
+    iface, max_gap = run.interface, front.max_gap
     x, t = iface["x"], iface["t"]
     ns = len(x)
     dx = 1.0 / ns
@@ -228,21 +242,23 @@ def fate(front: Front, iface: dict, max_gap: float = MAX_GAP) -> str:
     return "running" if float(t[-1]) - front.t_end <= max_gap else "arrested"
 
 
-def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = MAX_GAP) -> list[Precursor]:
-    """Every front that arrested inside the contact, with its arrest time, site and length."""
-    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
-    ns = len(iface["x"])
-    out = []
-    for i, f in enumerate(fr):
-        if fate(f, iface, max_gap) != "arrested":
-            continue
-        out.append(Precursor(i, f.nucleation_time, f.nucleation_x, f.t_end, f.x_far,
-                             abs(f.x_far - f.nucleation_x) + 1.0 / ns, f.kind, f))
-    return out
+@front_field("arrest_length", "l", "for an arrested front (a precursor), the length of contact it broke: "
+             "|x_arrest - x_nucleation| + 1/sites; null otherwise", "arrest", "6.3f")
+def arrest_length(run, front: Front) -> float | None:
+    """|x_far - x_nucleation| + 1/sites (l) for a front whose fate is "arrested", else None."""
+    if front.fate != "arrested":
+        return None
+    return abs(front.x_far - front.nucleation_x) + 1.0 / len(run.x)
 
 
-def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
-                max_gap: float = MAX_GAP) -> dict:
+def precursors(run, **kw) -> list[Precursor]:
+    """Every front of ``run.fronts(**kw)`` that arrested inside the contact, with its arrest time, site and
+    length."""
+    return [Precursor(i, f.nucleation_time, f.nucleation_x, f.t_end, f.x_far, f.arrest_length, f.kind, f)
+            for i, f in enumerate(run.fronts(**kw)) if f.fate == "arrested"]
+
+
+def observables(run, **kw) -> dict:
     """One flat row of friction and front observables (the columns of a sweep's summary table).
 
     Keys and units: first_break_time (l/c_r), first_break_x (l), mu_first_break, mu_s, mu_s_time (l/c_r),
@@ -252,14 +268,14 @@ def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = N
     of the first crossing front, c_r), front_speed_mean (mean |mean speed| of all fronts, c_r),
     slip_per_event (l).  Missing values are NaN (numbers) or "" (words).
     """
-    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
-    pk = static_peak(iface, fn)
-    fates = [fate(f, iface, max_gap) for f in fr]
-    pre = precursors(iface, fr, max_gap)
+    fr = run.fronts(**kw)
+    pk = static_peak(run)
+    fates = [f.fate for f in fr]
+    pre = precursors(run, **kw)
     crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
     nan = math.nan
-    m = mu(iface)
-    ks = slip_onset(iface)
+    m = mu(run)
+    ks = slip_onset(run)
     sliding = m[ks:] if ks is not None else m[:0]
     speeds = [abs(f.mean_speed) for f in fr if math.isfinite(f.mean_speed)]
     slips = [f.slip_u for f in fr if math.isfinite(f.slip_u)]
@@ -307,10 +323,9 @@ UNITS = {"first_break_time": "l/c_r", "first_break_x": "l", "mu_first_break": "-
          "slip_per_event": "l"}
 
 
-def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
-                  max_gap: float = MAX_GAP) -> list[str]:
+def summary_lines(run, **kw) -> list[str]:
     """The friction part of a run's report: static peak, slip onset, precursors."""
-    pk = static_peak(iface, fn)
+    pk = static_peak(run)
     if not math.isfinite(pk.mu_s):
         return ["friction: no mu(t) in this record"]
     where = ("" if pk.place == "no break" else
@@ -320,7 +335,7 @@ def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None =
     lines = [f"static peak mu_s = {pk.mu_s:.4g}{bound} at t = {pk.time:.3f} l/c_r{where}"]
     lines.append(f"slip onset (every bond broken once) at t = {pk.slip_onset:.3f} l/c_r"
                  if pk.slip_onset is not None else "slip onset: not within the record")
-    pre = precursors(iface, fr, max_gap)
+    pre = precursors(run, **kw)
     if pre:
         lines.append(f"{len(pre)} precursors (fronts that arrested), arrest lengths "
                      + ", ".join(f"{p.arrest_length:.3f}" for p in pre[:12]) + " l")
@@ -329,22 +344,22 @@ def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None =
     return lines
 
 
-def summary(iface: dict, fn: float | None = None) -> str:
+def summary(run) -> str:
     """First break, the front catalogue with each front's fate, and the friction record (static peak,
-    slip onset, precursors), as ``parslip run`` prints it; ``fn`` is F_N."""
+    slip onset, precursors), as ``parslip run`` prints it."""
+    iface = run.interface
     tb, xb = first_break(iface)
     lines = []
     if tb is None:
         lines.append("no bond broke")
     else:
         lines.append(f"first break at t = {tb:.3f} l/c_r, x/l = {', '.join(f'{v:.3f}' for v in xb[:6])}")
-    fr = front_catalogue(iface)
+    fr = run.fronts()
     lines.append(f"{len(fr)} rupture fronts")
     if fr:
-        arrest = {p.index: p.arrest_length for p in precursors(iface, fr)}
-        lines.append(table(fr[:12], [fate(f, iface) for f in fr[:12]], arrest))
+        lines.append(table(fr[:12]))
     if "mu" in iface and len(iface["x"]):
-        lines += summary_lines(iface, fn, fr)
+        lines += summary_lines(run)
     return "\n".join(lines)
 
 
@@ -354,15 +369,15 @@ def summary(iface: dict, fn: float | None = None) -> str:
 MIN_DROP = 0.2
 
 
-def slip_events(iface: dict, fr: list[Front] | None = None, min_drop: float = MIN_DROP,
-                max_gap: float = MAX_GAP) -> list[SlipEvent]:
+def slip_events(run, min_drop: float = MIN_DROP, **kw) -> list[SlipEvent]:
     """The slip events of a stick-slip record: each drop of mu(t) from a peak to the following trough by
     at least ``min_drop`` times the record's largest mu, found as a drawdown (a stick phase ends where mu
     has fallen that far below its running peak; the slip ends at the lowest mu before mu has risen that
     far again).  With each event: mu before and after, the loader's displacement at its start, the fronts
     nucleated since the previous event ended, and the precursors (fronts arrested inside the contact) since the previous event
     with their arrest lengths and mu at arrest.  An event still falling at the record's end is included."""
-    m, t = mu(iface), np.asarray(iface["t"], float)
+    iface = run.interface
+    m, t = mu(run), np.asarray(iface["t"], float)
     ok = np.isfinite(m)
     if not ok.any():
         return []
@@ -383,8 +398,8 @@ def slip_events(iface: dict, fr: list[Front] | None = None, min_drop: float = MI
             slipping, k_peak = False, k
     if slipping:
         spans.append((k_peak, k_low))
-    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
-    pre = precursors(iface, fr, max_gap)
+    fr = run.fronts(**kw)
+    pre = precursors(run, **kw)
     loader = np.asarray(iface.get("loader", np.zeros(len(t))), float)
     out, t_prev = [], -math.inf
     for i, (a, b) in enumerate(spans):

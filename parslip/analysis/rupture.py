@@ -1,10 +1,11 @@
-"""Measures of a rupture front that the interface studies ask for, from the front catalogue and the
-interface record (``analysis.fronts``, ``io.contract``); no file access of its own.
+"""Measures of rupture as a crack: what a front released and how it ran, from the run (``analysis.results
+.Run``: its catalogue and interface record); no file access, no drawing.  The catalogue options
+(``max_gap``, ``min_sites``, ``window``) pass through to ``run.fronts``.
 
-andrews_s(iface, front)         Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) as the
+andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) as the
                                 run has it along the front's path (the 2D supershear threshold is S ~ 1.77)
-daughters(fronts)               fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
-speed_summary(fronts)           the largest local speed fitted over the catalogue's window, and how many
+daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
+speed_summary(run)              the largest local speed fitted over the catalogue's window, and how many
                                 sites ran above c_s or broke in bursts
 through_patch(front, lo, hi)    how a front met a patch [lo, hi) of the contact: its mean speed before,
                                 inside and after it, and whether it got through
@@ -29,7 +30,7 @@ def _sites(iface: dict, front: Front) -> np.ndarray:
     return np.clip(np.rint(np.asarray(front.tip["x"]) * len(iface["x"]) - 0.5).astype(int), 0, len(iface["x"]) - 1)
 
 
-def andrews_s(iface: dict, front: Front) -> dict:
+def andrews_s(run, front: Front) -> dict:
     """S = (tau_peak - tau_0) / (tau_0 - tau_res) along the front's path, from the interface shear traction
     sxy of the frames: tau_0, the mean over the path of the traction in the last frame before the front
     nucleated; tau_peak, the mean over the path of each site's largest traction up to the frame that first
@@ -37,6 +38,7 @@ def andrews_s(iface: dict, front: Front) -> dict:
     tractions are taken with the sign of tau_peak, so S does not depend on the drive's direction.  Returns
     {"S", "tau_0", "tau_peak", "tau_res"}; S is NaN when tau_0 - tau_res is not positive (nothing was
     released)."""
+    iface = run.interface
     nan = {"S": math.nan, "tau_0": math.nan, "tau_peak": math.nan, "tau_res": math.nan}
     if "sxy" not in iface or len(front.tip["t"]) == 0:
         return nan
@@ -57,10 +59,11 @@ def andrews_s(iface: dict, front: Front) -> dict:
             "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}
 
 
-def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
+def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
     """Every front born ahead of another, running front's tip, in its direction of travel, by at least
     ``min_gap`` (l; 2 sites of a 100-site contact): {"mother", "daughter" (catalogue indices), "t" (its
     nucleation, l/c_r), "x" (l), "ahead" (l from the mother's tip then)}."""
+    fronts = run.fronts(**kw)
     out = []
     for i, m in enumerate(fronts):
         if m.direction == 0:
@@ -76,11 +79,12 @@ def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
     return out
 
 
-def speed_summary(fronts: list[Front]) -> dict:
+def speed_summary(run, **kw) -> dict:
     """{"max_speed" (the largest |local speed| any front reached, over the catalogue's fit window, bursts
     left out), "supershear_sites" (sites run above c_s, over all fronts), "supershear_fronts" (how many
     fronts had such a stretch), "burst_sites" (sites broken in bursts faster than c_l: near-simultaneous
     breaks, no speed)}."""
+    fronts = run.fronts(**kw)
     speeds = [abs(f.max_speed) for f in fronts if math.isfinite(f.max_speed)]
     return {"max_speed": max(speeds) if speeds else math.nan,
             "supershear_sites": sum(s["n_sites"] for f in fronts for s in f.supershear),
