@@ -1,6 +1,7 @@
 """The interface studies' measures (``analysis.rupture``) on records drawn by hand, where each answer is
 known: a daughter front born ahead of a running one, a front that slows in a patch and stops at it, and
 Andrews' S of a traction history made to give S = 1.5."""
+import json
 import math
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 
 from helpers import DT, NS, blank, draw
 from parslip.analysis import rupture
+from parslip.analysis.fronts import FIELDS, table
 from parslip.analysis.results import Run
 
 
@@ -55,3 +57,24 @@ def test_andrews_s_of_a_known_traction_history():
         got = rupture.andrews_s(run, run.fronts()[0])
         assert got["S"] == pytest.approx(peak - 1.0) and got["tau_0"] == pytest.approx(1.0)
         assert got["tau_peak"] == pytest.approx(peak) and got["tau_res"] == pytest.approx(0.0)
+
+
+def test_traction_drop_of_a_known_traction_history():
+    """Each site carries tau_0 = 1 + s/100 until the frame that shows its bond broken, then 0.25: the drop
+    at site s is 0.75 + s/100, and its mean over the crack's path (sites 0-59) is 0.75 + 0.295, whichever
+    the sign of the traction.  The field is registered: it reads as front.traction_drop, is a key of the
+    front's JSON and a column of the table."""
+    it = blank(120)
+    arr = draw(it, 20, 0, +1, 1, 1000, 0.001, crack=True)
+    sxy = np.empty((120, NS))
+    for s, k in enumerate(arr):
+        sxy[:k, s], sxy[k:, s] = 1 + s / 100, 0.25
+    want = 0.75 + np.mean(np.arange(NS)) / 100
+    for sign in (1.0, -1.0):
+        it["sxy"] = sign * sxy
+        (f,) = Run.from_arrays(it).fronts()
+        assert f.traction_drop == pytest.approx(want, rel=1e-12)
+        assert json.loads(json.dumps(f.to_dict()))["traction_drop"] == pytest.approx(want, rel=1e-12)
+    assert FIELDS["traction_drop"].units == "rho c_r^2" and "dtau" in table([f])
+    it.pop("sxy")
+    assert Run.from_arrays(it).fronts()[0].traction_drop is None

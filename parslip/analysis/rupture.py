@@ -9,6 +9,7 @@ speed_summary(run)              the largest local speed fitted over the catalogu
                                 sites ran above c_s or broke in bursts
 through_patch(front, lo, hi)    how a front met a patch [lo, hi) of the contact: its mean speed before,
                                 inside and after it, and whether it got through
+traction_drop (per-front field) the mean drop of the shear traction at the sites the front broke
 
 Units: x in l, t in l/c_r, speeds in c_r, tractions in rho c_r^2 (``/interface/sxy``).
 """
@@ -18,7 +19,7 @@ import math
 
 import numpy as np
 
-from .fronts import Front
+from .fronts import Front, front_field
 
 # S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
 # 1.77 (tau_0 - tau_res).
@@ -118,3 +119,32 @@ def through_patch(front: Front, lo: float, hi: float, c_l: float = math.inf) -> 
            "through": bool(np.any(x >= hi) if d > 0 else np.any(x < lo))}
     out["bursts"] = len(bursts)
     return out
+
+
+@front_field("traction_drop", "rho c_r^2", "mean over the front's path of the drop of the interface shear "
+             "traction its tip brings: per site, sxy in the last frame before the break minus sxy in the first "
+             "frame that shows it (the break from the event record), signed so that a release of the load "
+             "the path carried is positive; null without sxy", "dtau", "9.3g")
+def traction_drop(run, front: Front) -> float | None:
+    """Mean shear-traction drop along the front's path, rho c_r^2 (``/interface/sxy``'s units).
+
+    Per site s the tip reached, with k_s the first interface frame that shows its bond broken
+    (``tip["frame"]``: the first frame after the break's step in the event record, or the frame of the break
+    in a file without events):  d_tau_s = sign * (sxy[k_s - 1, s] - sxy[k_s, s]), where sign is that of
+    the mean of sxy[k_s - 1, s] over the path, so a front that releases the traction the path carried
+    has d_tau > 0 whichever way the drive loads it.  The value is the mean of d_tau_s over the sites with
+    a frame before their break (a bond broken in frame 0 has none); None when the record holds no sxy or
+    no such site.  The frames bracket the break by at most one frame interval, so d_tau_s is the drop
+    over that interval."""
+    iface = run.interface
+    if "sxy" not in iface:
+        return None
+    sites = _sites(iface, front)
+    frames = np.asarray(front.tip["frame"], int)
+    ok = frames > 0
+    if not ok.any():
+        return None
+    sxy = np.asarray(iface["sxy"], float)
+    before, after = sxy[frames[ok] - 1, sites[ok]], sxy[frames[ok], sites[ok]]
+    sign = 1.0 if np.mean(before) >= 0 else -1.0
+    return float(sign * np.mean(before - after))
