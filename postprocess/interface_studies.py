@@ -18,6 +18,7 @@ import numpy as np
 from parslip.analysis import rupture, table
 from parslip.analysis.figures import pyplot, save
 from parslip.analysis.friction import slip_events
+from parslip.analysis.fronts import wave_speeds
 from parslip.analysis.results import Run
 
 FORM = 2
@@ -86,7 +87,7 @@ def barriers_study(d):
         lo, hi, db = patch_of(run)
         fr = run.fronts()
         f = fr[0] if fr else None
-        res = rupture.through_patch(f, lo, hi, c_l=run.events["c_l"]) if f is not None and math.isfinite(lo) \
+        res = rupture.through_patch(f, lo, hi, c_l=wave_speeds(run)["c_max"]) if f is not None and math.isfinite(lo) \
             else {"before": math.nan, "inside": math.nan, "after": math.nan, "through": True, "bursts": 0}
         beyond = [x for x in rupture.daughters(run) if math.isfinite(hi) and x["mother"] == 0 and x["x"] >= hi]
         rows.append({"point": row["point"], "drive.mode": row["drive.mode"],

@@ -15,6 +15,8 @@ The per-front fields
                                             of docs/guide/analysis.md read it
   table(fronts), resolution_lines(fronts)   the catalogue as text
 Measures of fronts and speeds
+  wave_speeds(run), band_of(speed, waves)   the wave speeds that class a speed, and its band (``BANDS``)
+  band (per-front field)                    the band of a front's max_speed
   first_break_time(run), first_break_frame(run)       the first break, l/c_r and its frame
   driven_edge(run)                          x/l of the edge the drive loads first
   crossing_time(run, i, reach)              time a front took to run ``reach`` l, l/c_r
@@ -93,8 +95,9 @@ for _name, _units, _doc, _col, _fmt in (
         ("kind", "-", "pulse when a bond behind the tip had re-attached when the tip made its last advance, "
          "else crack", "kind", ">6"),
         ("mean_speed", "c_r", "(x_last - x_first) / (t_last - t_first), signed (null for a front that broke "
-         "faster than c_l from end to end)", "v_mean", "9.3g"),
-        ("max_speed", "c_r", "the local speed of largest magnitude, signed (bursts left out)", "v_max", "9.3g"),
+         "faster than every wave speed from end to end)", "v_mean", "9.3g"),
+        ("max_speed", "c_r", "the fitted local speed of largest magnitude, signed, bursts included (its band "
+         "says which)", "v_max", "9.3g"),
         ("steady_speed", "c_r", "|speed| fitted over the middle 60 % of the sites", None, ""),
         ("accel_x", "l", f"first x_tip where |v| exceeds {ACCEL_FACTOR:g} x the median speed of the first half "
          "of the path (null if never)", "accel_x", "7.3f"),
@@ -106,10 +109,14 @@ for _name, _units, _doc, _col, _fmt in (
         ("resolution", "l/c_r", "the time resolution of the arrival times: dt, or the frame interval for a "
          "file without events", None, ""),
         ("fit_sites", "-", "sites in each local speed fit (2 window + 1)", None, ""),
-        ("supershear", "-", "stretches of the path whose local speed exceeds the block's c_s (and at most its "
-         "c_l), each {sites: [first, last], x: [x0, x1], t: [t0, t1], n_sites, n_steps, max_speed}", None, ""),
-        ("bursts", "-", "stretches whose fit exceeds the block's c_l: breaks too close in time for any signal, "
-         "no speed (max_speed null); same keys as supershear", None, ""),
+        ("supershear", "-", "stretches of the path whose local speed exceeds the block's c_s (and at most the "
+         "fastest wave speed), each {sites: [first, last], x: [x0, x1], t: [t0, t1], n_sites, n_steps, "
+         "max_speed}", None, ""),
+        ("bursts", "-", "stretches whose fit exceeds every wave speed the system carries: breaks too close in "
+         "time for any signal, no speed (v is null there; max_speed the largest fit); same keys as supershear",
+         None, ""),
+        ("stretches", "-", "the whole path cut into speed bands: each stretch as in supershear, with its band "
+         "(sub-Rayleigh, c_R to c_s, supershear, above block c_l or burst)", None, ""),
         ("tip", "-", "arrays along the tip trajectory, one entry per site reached: t (arrival), step (its drive "
          "step; from events only), frame (the first frame that shows the break), x, v (local speed, NaN in a "
          "burst), w (width, a), du, dv (slip carried at that site, l), u_behind, v_behind (displacement of "
@@ -182,8 +189,9 @@ class Front:
     fit_sites: int = 2 * WINDOW + 1   # sites in each local speed fit
     # Stretches of the tip's path, each {"sites": [first, last], "x": [x0, x1] (l), "t": [t0, t1] (l/c_r),
     # "n_sites", "n_steps" (distinct break steps), "max_speed" (c_r, unsigned; None for a burst)}:
-    supershear: list = field(default_factory=list)   # local speed above c_s (and at most c_l)
-    bursts: list = field(default_factory=list)       # fits above c_l: near-simultaneous breaks, not a speed
+    supershear: list = field(default_factory=list)   # local speed above c_s (and at most c_max)
+    bursts: list = field(default_factory=list)       # fits above every wave speed: not a speed
+    stretches: list = field(default_factory=list)    # the path cut into speed bands, each with its "band"
     max_gap: float = MAX_GAP    # the detector's patience this front was found with, l/c_r
     run: object = field(default=None, repr=False, compare=False)   # the run it belongs to (its measures read it)
 
@@ -293,9 +301,14 @@ def resolution_lines(fr: list[Front]) -> list[str]:
     src = "exact break steps" if f0.tip.get("step") is not None else "interface frames"
     out = [f"speeds: tip arrival times from {src} (resolution {f0.resolution:.3g} l/c_r), each local speed "
            f"fitted over {f0.fit_sites} sites"]
+    if f0.run is not None:
+        w = wave_speeds(f0.run)
+        out.append(f"bands (c_r): c_R = {w['c_R']:.4g} (the lattice's Rayleigh speed), block c_s = {w['c_s']:.4g}, "
+                   f"c_l = {w['c_l']:.4g}; fastest wave carried {w['c_max']:.4g}" +
+                   (" (the substrate's c_l)" if w["c_max"] > w["c_l"] else ""))
     for i, f in enumerate(fr):
-        for name, items in (("supershear (above c_s)", f.supershear), ("burst (fit above c_l: near-simultaneous "
-                                                                      "breaks, no speed)", f.bursts)):
+        for name, items in (("supershear (above c_s)", f.supershear), ("burst (fit above every wave speed: "
+                                                                      "near-simultaneous breaks, no speed)", f.bursts)):
             for b in items:
                 speed = f", up to {b['max_speed']:.3g} c_r" if b.get("max_speed") is not None else ""
                 out.append(f"  front {i + 1}: {name}: sites {b['sites'][0]}-{b['sites'][1]} (x/l {b['x'][0]:.3f}-"
@@ -313,8 +326,8 @@ def resolution_lines(fr: list[Front]) -> list[str]:
 def _break_record(run) -> dict:
     """The bond events the detector reads, as arrays ``step``, ``time`` (l/c_r), ``site``, ``kind``
     (EVENT_BREAK, EVENT_FORM) and ``frame`` (the first interface frame that shows each), sorted by step,
-    site, kind; with ``dt`` (the resolution of the times, l/c_r), the block's ``c_s``, ``c_l`` (c_r; inf
-    when the run does not say) and ``exact`` (True for events, False for tips read off the frames)."""
+    site, kind; with ``dt`` (the resolution of the times, l/c_r) and ``exact`` (True for events, False for
+    tips read off the frames)."""
     iface = run.interface
     ev = iface.get("events")
     nf = len(iface["t"])
@@ -324,25 +337,59 @@ def _break_record(run) -> dict:
         frame = (np.minimum(np.searchsorted(fsteps, steps, side="right"), nf - 1) if fsteps is not None and nf
                  else np.zeros(len(steps), np.int64))
         return {"step": steps, "time": np.asarray(ev["time"], float), "site": np.asarray(ev["site"]),
-                "kind": np.asarray(ev["kind"]), "frame": frame, "dt": float(ev["dt"]), "c_s": float(ev["c_s"]),
-                "c_l": float(ev["c_l"]), "exact": True}
+                "kind": np.asarray(ev["kind"]), "frame": frame, "dt": float(ev["dt"]), "exact": True}
     broken = np.asarray(iface["intact"]) == 0
     change = broken.copy()
     change[1:] ^= broken[:-1]                  # a bond broken in frame 0 counts as broken there
     k, s = np.nonzero(change)
     t = np.asarray(iface["t"], float)
-    c_s, c_l = _block_waves(run)
     return {"step": k.astype(np.int64), "time": t[k], "site": s,
             "kind": np.where(broken[k, s], EVENT_BREAK, EVENT_FORM), "frame": k.astype(np.int64),
-            "dt": float(np.median(np.diff(t))) if nf > 1 else 1.0, "c_s": c_s, "c_l": c_l, "exact": False}
+            "dt": float(np.median(np.diff(t))) if nf > 1 else 1.0, "exact": False}
 
 
-def _block_waves(run) -> tuple[float, float]:
-    """The block's c_s and c_l in c_r from the run's attributes; inf when it does not hold them."""
-    a = run.attrs
-    if all(k in a for k in ("c_s", "c_l", "c_r")):
-        return float(a["c_s"]) / float(a["c_r"]), float(a["c_l"]) / float(a["c_r"])
-    return math.inf, math.inf
+def wave_speeds(run) -> dict:
+    """The wave speeds that class a front's speed, in c_r (``model.physics``):
+
+      c_R     the Born lattice's own surface-wave speed (root ``c_surface_born``: 0.9475 c_s = 1.040 c_r at
+              nu = 0.2), the lattice's Rayleigh speed; c_s when the run does not say
+      c_s, c_l   the block's shear and longitudinal speeds (the event record's, or the root attributes')
+      sub_l   the substrate's longitudinal speed, from its stiffnesses ``material.bottom_kn``,
+              ``material.bottom_kt`` (Eq. 2.2 inverted: c_l^2 = (9 k_n + 3 k_t)/8 a^2); 0 for a rigid
+              substrate or none
+      c_max   the fastest wave the system carries, max(c_l, sub_l): a fit above it is no speed (a burst)
+
+    A run that names none of them (a record drawn without attributes) gets inf for c_s, c_l and c_max."""
+    from ..model.physics import born_wave_speeds
+    a, ev, sc = run.attrs, run.events, run.scene
+    c_r = float(a.get("c_r", 1.0))
+    if ev is not None:
+        c_s, c_l = float(ev["c_s"]), float(ev["c_l"])
+    elif "c_s" in a and "c_l" in a:
+        c_s, c_l = float(a["c_s"]) / c_r, float(a["c_l"]) / c_r
+    else:
+        c_s = c_l = math.inf
+    c_R = float(a["c_surface_born"]) / c_r if "c_surface_born" in a else c_s
+    sub_l = 0.0
+    if sc.get("lattice.substrate", "elastic") == "elastic" and sc.get("lattice.bottom_rows", 0) and \
+            "material.bottom_kn" in sc:
+        sub_l = born_wave_speeds(float(sc["material.bottom_kn"]), float(sc.get("material.bottom_kt", 0.0)))[0] / c_r
+    return {"c_R": c_R, "c_s": c_s, "c_l": c_l, "sub_l": sub_l, "c_max": max(c_l, sub_l)}
+
+
+# The speed bands, slowest first: (name, the wave speed (``wave_speeds``) it ends at).
+BANDS = (("sub-Rayleigh", "c_R"), ("c_R to c_s", "c_s"), ("supershear", "c_l"), ("above block c_l", "c_max"),
+         ("burst", None))
+
+
+def band_of(speed: float, waves: dict) -> str | None:
+    """The band of a speed (c_r, either sign): sub-Rayleigh below c_R, "c_R to c_s", supershear from c_s to
+    the block's c_l, "above block c_l" up to the fastest wave the substrate carries, burst above every wave
+    speed (``BANDS``; each band holds its upper end); None for NaN."""
+    v = abs(speed)
+    if not math.isfinite(v):
+        return None
+    return next(name for name, top in BANDS if top is None or v <= waves[top])
 
 
 def _runs(sites: np.ndarray) -> list[tuple[int, int]]:
@@ -483,32 +530,49 @@ def _window_speed(tt: np.ndarray, xx: np.ndarray, d: int, res: float, m: int) ->
     return v
 
 
+def _stretch(i: int, j: int, s, xx, tt, steps, v) -> dict:
+    """Sites i..j of a path as a stretch: its sites, x, t, how many sites and distinct steps, largest |v|."""
+    vv = np.abs(v[i:j + 1])
+    vv = vv[np.isfinite(vv)]
+    return {"sites": [int(s[i]), int(s[j])], "x": [float(xx[i]), float(xx[j])],
+            "t": [float(tt[i]), float(tt[j])], "n_sites": int(j - i + 1),
+            "n_steps": int(len(np.unique(steps[i:j + 1]))), "max_speed": float(vv.max()) if len(vv) else None}
+
+
 def _stretches(idx, s, xx, tt, steps, v) -> list[dict]:
-    """The contiguous stretches of the path where ``idx`` holds, with their sites, x, t and largest |v|."""
-    out = []
-    for i, j in _runs(np.flatnonzero(idx)):
-        vv = np.abs(v[i:j + 1])
-        vv = vv[np.isfinite(vv)]
-        out.append({"sites": [int(s[i]), int(s[j])], "x": [float(xx[i]), float(xx[j])],
-                    "t": [float(tt[i]), float(tt[j])], "n_sites": int(j - i + 1),
-                    "n_steps": int(len(np.unique(steps[i:j + 1]))),
-                    "max_speed": float(vv.max()) if len(vv) else None})
+    """The contiguous stretches of the path where ``idx`` holds (``_stretch``)."""
+    return [_stretch(i, j, s, xx, tt, steps, v) for i, j in _runs(np.flatnonzero(idx))]
+
+
+def _band_stretches(fit, s, xx, tt, steps, waves: dict) -> list[dict]:
+    """The path cut into stretches of one speed band each (``band_of`` of each site's fitted local speed),
+    each ``_stretch`` with its "band"; sites without a fit (a front that did not move) in none."""
+    labels = [band_of(v, waves) for v in fit]
+    out, i = [], 0
+    while i < len(labels):
+        j = i
+        while j + 1 < len(labels) and labels[j + 1] == labels[i]:
+            j += 1
+        if labels[i] is not None:
+            out.append({"band": labels[i], **_stretch(i, j, s, xx, tt, steps, fit)})
+        i = j + 1
     return out
 
 
 def _speeds(s, xx, tt, steps, d: int, rec: dict, m: int) -> dict:
     """The speeds of one path (sites ``s`` at x ``xx`` reached at ``tt``, steps ``steps``): local ``v`` (NaN
-    in a burst: a fit above c_l, breaks too close in time for any signal), ``mean``, ``vmax``, ``steady``,
-    ``accel`` and the ``supershear`` and ``bursts`` stretches (see ``Front``)."""
+    in a burst: a fit above every wave speed, breaks too close in time for any signal), ``mean``,
+    ``vmax`` (the fit of largest magnitude, bursts included), ``steady``, ``accel``, the ``supershear``
+    and ``bursts`` stretches and the path cut into speed bands, ``stretches`` (see ``Front``)."""
     n = len(s)
     if d == 0:
         return {"v": np.full(n, np.nan), "mean": math.nan, "vmax": math.nan, "steady": math.nan, "accel": None,
-                "supershear": [], "bursts": []}
-    res, c_s, c_l = rec["dt"], rec["c_s"], rec["c_l"]
-    v = _window_speed(tt, xx, d, res, m)
-    fast = np.abs(v) > c_l
-    bursts = _stretches(fast, s, xx, tt, steps, np.full(n, np.nan))
-    v = np.where(fast, np.nan, v)
+                "supershear": [], "bursts": [], "stretches": []}
+    res, waves = rec["dt"], rec["waves"]
+    c_max = waves["c_max"]
+    fit = _window_speed(tt, xx, d, res, m)
+    fast = np.abs(fit) > c_max
+    v = np.where(fast, np.nan, fit)
     span_t = tt[-1] - tt[0]
     mean = (xx[-1] - xx[0]) / span_t if span_t > 0 else math.nan
     lo, hi = int(0.2 * n), max(int(0.8 * n), int(0.2 * n) + 2)
@@ -517,11 +581,13 @@ def _speeds(s, xx, tt, steps, d: int, rec: dict, m: int) -> dict:
     half = max(1, n // 2)
     early = float(np.median(np.abs(v[:half][finite[:half]]))) if finite[:half].any() else math.nan
     accel_at = np.flatnonzero(np.abs(np.nan_to_num(v)) > ACCEL_FACTOR * early) if math.isfinite(early) else []
-    return {"v": v, "mean": float(mean) if abs(mean) <= c_l else math.nan,
-            "vmax": float(v[int(np.nanargmax(np.abs(v)))]) if finite.any() else math.nan,
-            "steady": float(steady) if steady <= c_l else math.nan,
+    return {"v": v, "mean": float(mean) if abs(mean) <= c_max else math.nan,
+            "vmax": float(fit[int(np.nanargmax(np.abs(fit)))]) if np.isfinite(fit).any() else math.nan,
+            "steady": float(steady) if steady <= c_max else math.nan,
             "accel": float(xx[accel_at[0]]) if len(accel_at) else None,
-            "supershear": _stretches(np.abs(v) > c_s, s, xx, tt, steps, v), "bursts": bursts}
+            "supershear": _stretches(np.abs(v) > waves["c_s"], s, xx, tt, steps, v),
+            "bursts": _stretches(fast, s, xx, tt, steps, fit),
+            "stretches": _band_stretches(fit, s, xx, tt, steps, waves)}
 
 
 def _slips(iface: dict, s: np.ndarray, frames: np.ndarray, windows: dict) -> tuple:
@@ -564,7 +630,7 @@ def _front(c: _Chain, rec: dict, iface: dict, h: int, t_of: dict, widths: dict, 
     tip["frame"] = frames
     return Front(float(tt[0]), float(xx[0]), int(d), kind, sp["mean"], sp["vmax"], sp["steady"], sp["accel"],
                  _median(w), _median(du), _median(dv), tip, resolution=float(rec["dt"]), fit_sites=2 * h + 1,
-                 supershear=sp["supershear"], bursts=sp["bursts"])
+                 supershear=sp["supershear"], bursts=sp["bursts"], stretches=sp["stretches"])
 
 
 def _slip_windows(arrivals: list[dict], nf: int) -> dict:
@@ -602,6 +668,7 @@ def fronts(run, max_gap: float = MAX_GAP, min_sites: int = MIN_SITES, window: in
     """
     iface = run.interface
     rec = _break_record(run)
+    rec["waves"] = wave_speeds(run)
     found, t_of, widths = chains(rec, len(iface["x"]), max_gap)
     kept = [c for c in found if len(c.arrival) >= min_sites]
     frame_of = dict(zip(rec["step"].tolist(), rec["frame"].tolist()))
@@ -691,3 +758,11 @@ def section_width(run, t: float) -> float:
     flips = np.flatnonzero(np.diff(np.r_[0, broken, 0]))
     lengths = [b - a for a, b in zip(flips[::2], flips[1::2]) if a > 0 and b < len(broken)]
     return float(np.median(lengths)) if lengths else math.nan
+
+
+@front_field("band", "-", "the speed band of max_speed: sub-Rayleigh (below the lattice's Rayleigh speed c_R), "
+             "c_R to c_s, supershear (c_s to the block's c_l), above block c_l (carried by the substrate) or burst "
+             "(above every wave speed); null for a front that did not move", "band", ">15")
+def band(run, front: Front) -> str | None:
+    """``band_of`` the front's max_speed, with the run's wave speeds (``wave_speeds``)."""
+    return band_of(front.max_speed, wave_speeds(run))
