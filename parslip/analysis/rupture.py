@@ -2,8 +2,9 @@
 .Run``: its catalogue and interface record); no file access, no drawing.  The catalogue options
 (``max_gap``, ``min_sites``, ``window``) pass through to ``run.fronts``.
 
-andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) as the
-                                run has it along the front's path (the 2D supershear threshold is S ~ 1.77)
+andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) per site
+                                along the front's path, and its median (the 2D supershear threshold is
+                                S ~ 1.77); the per-front field ``andrews_s`` is that median
 daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
 speed_summary(run)              the largest local speed fitted over the catalogue's window, and how many
                                 sites ran above c_s or broke in bursts
@@ -19,6 +20,7 @@ import math
 
 import numpy as np
 
+from ..io.contract import EVENT_BREAK
 from .fronts import Front, front_field
 
 # S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
@@ -31,33 +33,77 @@ def _sites(iface: dict, front: Front) -> np.ndarray:
     return np.clip(np.rint(np.asarray(front.tip["x"]) * len(iface["x"]) - 0.5).astype(int), 0, len(iface["x"]) - 1)
 
 
-def andrews_s(run, front: Front) -> dict:
-    """S = (tau_peak - tau_0) / (tau_0 - tau_res) along the front's path, from the interface shear traction
-    sxy of the frames: tau_0, the mean over the path of the traction in the last frame before the front
-    nucleated; tau_peak, the mean over the path of each site's largest traction up to the frame that first
-    shows its break; tau_res, the mean traction over the path in the frame where the front ends.  The
-    tractions are taken with the sign of tau_peak, so S does not depend on the drive's direction.  Returns
-    {"S", "tau_0", "tau_peak", "tau_res"}; S is NaN when tau_0 - tau_res is not positive (nothing was
-    released)."""
+# l/c_r: the window behind the tip over which a site's residual traction is averaged (a broken bond carries
+# none): about the time a paper pulse takes to pass a site, so tau_res is the traction the front leaves.
+RES_WINDOW = 1.0
+
+
+def _break_tractions(run, front: Front) -> np.ndarray | None:
+    """The shear traction (rho c_r^2) of each of the front's sites at the step it broke, from the event
+    record's ``traction`` (``/interface/events/traction``); None when the record has no such field."""
+    ev = run.events
+    if ev is None or "traction" not in ev or "step" not in front.tip:
+        return None
+    hit = np.flatnonzero(ev["kind"] == EVENT_BREAK)
+    at = {(int(k), int(st)): float(tr) for k, st, tr in zip(ev["step"][hit], ev["site"][hit], ev["traction"][hit])}
+    sites = _sites(run.interface, front)
+    return np.array([at.get((int(k), int(st)), math.nan) for k, st in zip(front.tip["step"], sites)])
+
+
+def andrews_s(run, front: Front, window: float = RES_WINDOW) -> dict:
+    """Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res), per site along the front's path,
+    then summarised; tractions are the interface shear traction sxy (rho c_r^2).  Per site s the tip reached:
+
+      tau_0     the traction the front runs into: s's traction in the last frame before the front's first
+                break shows (the frame before its nucleation)
+      tau_peak  s's traction at the step its bond broke, from the event record (``traction``); a file
+                without it falls back on the frames, the largest traction s showed from tau_0's frame to
+                the last frame before its break (which may miss the peak: ``peak_from`` says "frames")
+      tau_res   the mean traction at s over ``window`` l/c_r from the first frame that shows its break, a
+                broken bond counting 0 (it carries no force until it re-forms)
+
+    Tractions are taken with the sign of the path's median tau_peak, so S does not depend on the drive's
+    direction.  Returns {"S": the median over the sites where tau_0 - tau_res > 0 (something was released),
+    "tau_0", "tau_peak", "tau_res": their medians, "peak_from": "events" or "frames", "window", "sites":
+    {"S", "tau_0", "tau_peak", "tau_res"} per site in the tip's order}; NaN where nothing was released or
+    the record holds no sxy."""
     iface = run.interface
-    nan = {"S": math.nan, "tau_0": math.nan, "tau_peak": math.nan, "tau_res": math.nan}
+    nan = {"S": math.nan, "tau_0": math.nan, "tau_peak": math.nan, "tau_res": math.nan, "peak_from": None,
+           "window": window, "sites": {}}
     if "sxy" not in iface or len(front.tip["t"]) == 0:
         return nan
-    sxy, t = np.asarray(iface["sxy"], float), np.asarray(iface["t"], float)
-    sites = _sites(iface, front)
-    frames = np.asarray(front.tip.get("frame", np.searchsorted(t, front.tip["t"])), int)
-    frames = np.clip(frames, 0, len(t) - 1)
-    k0 = max(int(frames[0]) - 1, 0)                  # the last frame before the first break shows
-    k_end = min(int(frames.max()), len(t) - 1)
-    peak = np.array([sxy[k0:max(k, k0) + 1, s].max() if np.mean(sxy[k0:k + 1, s]) >= 0 else
-                     sxy[k0:max(k, k0) + 1, s].min() for s, k in zip(sites, frames)])
-    sign = 1.0 if np.mean(peak) >= 0 else -1.0
-    tau_0 = sign * float(np.mean(sxy[k0, sites]))
-    tau_peak = sign * float(np.mean(peak))
-    tau_res = sign * float(np.mean(sxy[k_end, sites]))
+    sxy = np.asarray(iface["sxy"], float) * (np.asarray(iface["intact"]) != 0)    # a broken bond carries 0
+    t, sites = np.asarray(iface["t"], float), _sites(iface, front)
+    frames = np.clip(np.asarray(front.tip["frame"], int), 0, len(t) - 1)
+    k0 = max(int(frames[0]) - 1, 0)
+    peak = _break_tractions(run, front)
+    peak_from = "events" if peak is not None else "frames"
+    if peak is None:                      # the frames' extreme before the break, in the direction of the load
+        sign0 = 1.0 if np.median(sxy[k0, sites]) >= 0 else -1.0
+        peak = np.array([sign0 * (sign0 * sxy[k0:max(k, k0 + 1), s]).max() for s, k in zip(sites, frames)])
+    sign = 1.0 if np.median(peak) >= 0 else -1.0
+    n_w = max(1, int(round(window / float(np.median(np.diff(t))))) if len(t) > 1 else 1)
+    tau_0 = sign * sxy[k0, sites]
+    tau_peak = sign * peak
+    tau_res = sign * np.array([sxy[k:k + n_w, s].mean() for s, k in zip(sites, frames)])
     released = tau_0 - tau_res
-    return {"S": (tau_peak - tau_0) / released if released > 0 else math.nan,
-            "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}
+    S = np.where(released > 0, (tau_peak - tau_0) / np.where(released > 0, released, 1.0), math.nan)
+    ok = np.isfinite(S)
+
+    def med(a):
+        return float(np.median(a[ok])) if ok.any() else math.nan
+    return {"S": med(S), "tau_0": med(tau_0), "tau_peak": med(tau_peak), "tau_res": med(tau_res),
+            "peak_from": peak_from, "window": window,
+            "sites": {"S": S, "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}}
+
+
+@front_field("andrews_s", "-", "Andrews' S = (tau_peak - tau_0) / (tau_0 - tau_res), the median over the "
+             "front's path of each site's S: tau_0 its traction before the front nucleated, tau_peak at the "
+             "step it broke (the event's traction; the frames' largest when the file has none), tau_res its "
+             "mean over 1 l/c_r behind the tip, 0 while the bond is broken (rupture.andrews_s)")
+def andrews_s_field(run, front: Front) -> float:
+    """The median S of ``andrews_s`` (its per-site values and the three tractions: call it directly)."""
+    return andrews_s(run, front)["S"]
 
 
 def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
