@@ -152,11 +152,11 @@ def test_fates_and_precursors_with_their_arrest_lengths():
     assert obs["mu_s"] == pytest.approx(2.0) and obs["mu_s_place"] == "after"
 
 
-def test_a_pulse_finished_by_an_edge_burst_crossed_and_the_burst_merged():
+def test_a_pulse_finished_by_an_edge_burst_was_relayed_and_the_burst_merged():
     """As under pull: a slow pulse from x = 1 reaches site 6 at frame 169 while the last six bonds at
-    x = 0 break from the edge toward it (frames 166-171).  The detector sees two fronts; the pulse
-    crossed (the rest of the contact broke as it arrived), the burst ran into the pulse: neither is
-    a precursor."""
+    x = 0 break from the edge toward it (frames 166-171).  The detector sees two fronts; the pulse was
+    relayed (its own tip stopped, the rest of the contact broke as it arrived: the contact was crossed,
+    and it counts as the crossing front), the burst ran into the pulse: neither is a precursor."""
     it = blank(400)
     draw(it, 10, NS - 1, -1, 3, 2, 0.001, sites=NS - 6)
     draw(it, 166, 0, +1, 1, 1, 0.001, sites=6, crack=True)
@@ -165,9 +165,11 @@ def test_a_pulse_finished_by_an_edge_burst_crossed_and_the_burst_merged():
     run = Run.from_arrays(it)
     fr = run.fronts()
     assert [(f.direction, f.sites) for f in fr] == [(-1, NS - 6), (1, 6)]
-    assert [f.fate for f in fr] == ["crossed", "merged"]
+    assert [f.fate for f in fr] == ["relayed", "merged"]
+    assert [FR.crossed_contact(run, f) for f in fr] == [True, False]
     assert FR.precursors(run) == []
-    assert FR.observables(run)["rupture_kind"] == "pulse" and FR.slip_onset(run) == 171
+    obs = FR.observables(run)
+    assert obs["rupture_kind"] == "pulse" and obs["n_crossed"] == 1 and FR.slip_onset(run) == 171
 
 
 def test_a_front_still_moving_when_the_record_ends_is_not_a_precursor():

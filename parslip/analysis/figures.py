@@ -411,7 +411,7 @@ def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> lis
 
 # --- friction -----------------------------------------------------------------------
 
-FATE_MARKERS = {"crossed": "o", "edge": "s", "merged": "v", "arrested": "X", "running": ">"}
+FATE_MARKERS = {"crossed": "o", "edge": "s", "relayed": "D", "merged": "v", "arrested": "X", "running": ">"}
 
 
 def fig_friction(run, out_dir: str) -> list[str]:
@@ -420,7 +420,7 @@ def fig_friction(run, out_dir: str) -> list[str]:
     Top: mu(t) (black), the drive's force over F_N (grey: it exceeds mu by the damping drag on the block),
     the first break (dotted), the slip onset (dashed; ``analysis.friction``), the static peak mu_s (star)
     and each front's nucleation on the curve, its marker telling its fate (o crossed, s left through an
-    edge, v merged with another front, X arrested: a precursor, > still running at the record's end).
+    edge, D relayed, v merged with another front, X arrested: a precursor, > still running at the record's end).
     Bottom: each front's tip x/l against t, in the same colours, its arrest marked X.
     """
     if "mu" not in run.interface:

@@ -6,7 +6,8 @@ Every measure is a function of the run (``analysis.results.Run``); the catalogue
   mu(run)                        mu(t) = -F_T / F_N per frame (``/interface/mu``)
   slip_onset(run)                the frame by which every bond had broken once
   static_peak(run)               mu_s, its time, window and place relative to the first break (``StaticPeak``)
-  fate (per-front field)         what became of a front: crossed, edge, merged, arrested, running
+  fate (per-front field)         what became of a front: crossed, edge, relayed, merged, arrested, running
+  crossed_contact(run, front)    whether its crossing of the contact completed (by its tip, or relayed)
   arrest_length (per-front field)  the length of contact an arrested front broke, l
   precursors(run)                the fronts that arrested inside the contact (``Precursor``)
   slip_events(run, min_drop)     the stick-slip record's drops of mu (``SlipEvent``)
@@ -38,13 +39,15 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
                   "after" it; mu at the first break is kept too.
   fate            of a front, from its tip trajectory (the sites it reached) and the bonds ahead of it,
                   the first rule that holds:
-                    crossed   it broke bonds from one edge of the contact to the other (it nucleated
-                              within ``edge_sites`` sites of one edge and reached the other), or it
-                              nucleated at an edge and every bond between its last site and the far
-                              edge broke within ``max_gap`` of its last advance: it met another front
-                              that finished the crossing (a pulse from the driven edge that sets off
-                              the last few bonds at the far edge at once, seen under pull);
-                    edge      the same from a nucleation inside the contact: it reached the far edge;
+                    crossed   its own tip broke bonds from one edge of the contact to the other (it
+                              nucleated within ``edge_sites`` sites of one edge and reached the other);
+                    edge      the same from a nucleation inside the contact: its tip reached the far edge;
+                    relayed   its tip stopped short of the far edge, but every bond between its last site
+                              and the far edge broke within ``max_gap`` of its last advance: another front
+                              finished its way (a pulse from the driven edge that sets off the last few
+                              bonds at the far edge at once, seen under pull).  Its own tip did not get
+                              through, so a patch's ``through`` and its fate agree; the contact was
+                              crossed all the same (``crossed_contact``);
                     merged    the bond just ahead of its tip was broken when it last advanced or broke
                               within ``max_gap``: it ran into another front's broken zone;
                     arrested  its tip stopped inside the contact with the bond ahead holding, and it did
@@ -58,10 +61,11 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
                   included: |x_arrest - x_nucleation| + 1/sites (l).  For a front from an edge, the
                   distance from that edge to where it stopped.
   rupture kind    of the run: the kind ("pulse" or "crack", ``fronts.Front.kind``) of the first front
-                  that crossed the contact.  When none crossed but the contact slipped everywhere all the
-                  same (a fast rupture the detector saw in pieces, or fronts that shared the contact
-                  out), the kind of the fronts that nucleated up to the slip onset, "mixed" if they
-                  differ; "none" when the contact never slipped everywhere and no front crossed.
+                  that crossed the contact (``crossed_contact``: by its own tip, or relayed from an
+                  edge).  When none crossed but the contact slipped everywhere all the same (a fast
+                  rupture the detector saw in pieces, or fronts that shared the contact out), the kind
+                  of the fronts that nucleated up to the slip onset, "mixed" if they differ; "none"
+                  when the contact never slipped everywhere and no front crossed.
   mean speed      of a front, (x_last - x_first)/(t_last - t_first) (``Front.mean_speed``); the table
                   gives |mean speed| of the first crossing front and the mean |mean speed| of all fronts.
   slip per event  the mean over the fronts of the slip each carries (``Front.slip_u``, the median over
@@ -82,7 +86,7 @@ EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one s
 def edge_sites(ns: int) -> int:
     """Sites at each end of a contact of ``ns`` sites that count as its edge: 2 %, at least one."""
     return max(1, int(round(EDGE_FRACTION * ns)))
-FATES = ("crossed", "edge", "merged", "arrested", "running")
+FATES = ("crossed", "edge", "relayed", "merged", "arrested", "running")
 
 
 @dataclass
@@ -203,32 +207,28 @@ def _fn(run) -> float | None:
     return float(fn) if fn is not None else None
 
 
-@front_field("fate", "-", "the first that holds: crossed (it broke bonds from one edge of the contact to the "
-             "other, or from an edge to where the rest of the contact broke within max_gap of its arrival: another "
-             "front finished the crossing), edge (the same from inside the contact), merged (the bond ahead of its "
-             "tip was broken by another front when it stopped, or within max_gap), arrested (a precursor: its tip "
+@front_field("fate", "-", "the first that holds: crossed (its own tip broke bonds from one edge of the contact "
+             "to the other), edge (the same from inside the contact), relayed (its tip stopped short of the far "
+             "edge, but the rest of the way broke within max_gap of its last advance: another front finished it), "
+             "merged (the bond ahead of its tip was broken by another front when it stopped, or within max_gap), "
+             "arrested (a precursor: its tip "
              "stopped inside the contact with the bond ahead holding, quiet for longer than max_gap before the "
              "record ends) or running (the same within max_gap of the record's end: it may still move)",
              "fate", ">8")
 def fate(run, front: Front) -> str:
-    """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring),
-    judged with the detector's patience the front was found with (``front.max_gap``)."""
+    """What became of a front: "crossed", "edge", "relayed", "merged", "arrested" or "running" (module
+    docstring), judged with the detector's patience the front was found with (``front.max_gap``)."""
     iface, max_gap = run.interface, front.max_gap
     x, t = iface["x"], iface["t"]
     ns = len(x)
-    dx = 1.0 / ns
     e = edge_sites(ns)
-    tol = (e + 0.5) * dx
-    xs = front.tip["x"]
-    lo, hi = float(xs.min()), float(xs.max())
-    at_rear, at_front = lo <= x[0] + tol, hi >= x[-1] - tol
+    at_rear, at_front = _at_edges(run, front)
     if at_rear and at_front:            # a chain grows from its nucleation run to its tip: edge to edge
         return "crossed"
     d = front.direction
     if (d > 0 and at_front) or (d < 0 and at_rear):
         return "edge"
     if d != 0:
-        near = at_rear if d > 0 else at_front
         tip = int(np.argmin(np.abs(x - front.x_far)))
         k0 = int(np.searchsorted(t, front.t_end - max_gap))
         k_end = int(np.searchsorted(t, front.t_end))
@@ -236,7 +236,7 @@ def fate(run, front: Front) -> str:
         broken = iface["intact"][k0:k1] == 0
         ahead = np.arange(tip + d, ns - e if d > 0 else e - 1, d)
         if len(ahead) and broken[:, ahead].any(axis=0).all():
-            return "crossed" if near else "edge"
+            return "relayed"
         if 0 <= tip + d < ns and broken[k_end - k0:, tip + d].any():
             return "merged"
     return "running" if float(t[-1]) - front.t_end <= max_gap else "arrested"
@@ -272,7 +272,7 @@ def observables(run, **kw) -> dict:
     pk = static_peak(run)
     fates = [f.fate for f in fr]
     pre = precursors(run, **kw)
-    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+    crossed = [f for f in fr if crossed_contact(run, f)]
     nan = math.nan
     m = mu(run)
     ks = slip_onset(run)
@@ -295,16 +295,30 @@ def observables(run, **kw) -> dict:
         "n_running": fates.count("running"), "n_merged": fates.count("merged"),
         "precursor_arrest_mean": float(np.mean(arrests)) if arrests else nan,
         "precursor_arrest_max": float(np.max(arrests)) if arrests else nan,
-        "rupture_kind": rupture_kind(fr, fates, pk.slip_onset),
+        "rupture_kind": rupture_kind(fr, crossed, pk.slip_onset),
         "front_speed": abs(crossed[0].mean_speed) if crossed else nan,
         "front_speed_mean": float(np.mean(speeds)) if speeds else nan,
         "slip_per_event": float(np.mean(slips)) if slips else nan,
     }
 
 
-def rupture_kind(fr: list[Front], fates: list[str], t_slip: float | None) -> str:
-    """"pulse", "crack", "mixed" or "none" (the module's definition)."""
-    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+def _at_edges(run, front: Front) -> tuple[bool, bool]:
+    """Whether the front's path reached the rear (x/l = 0) and the front (x/l = 1) edge of the contact, within
+    ``edge_sites`` sites."""
+    x = run.x
+    tol = (edge_sites(len(x)) + 0.5) / len(x)
+    return float(front.tip["x"].min()) <= x[0] + tol, float(front.tip["x"].max()) >= x[-1] - tol
+
+
+def crossed_contact(run, front: Front) -> bool:
+    """Whether the front's crossing of the contact completed: it crossed edge to edge by its own tip, or it
+    nucleated at an edge and was relayed to the other."""
+    return front.fate == "crossed" or (front.fate == "relayed" and any(_at_edges(run, front)))
+
+
+def rupture_kind(fr: list[Front], crossed: list[Front], t_slip: float | None) -> str:
+    """"pulse", "crack", "mixed" or "none" (the module's definition); ``crossed`` the fronts that crossed the
+    contact (``crossed_contact``), in catalogue order."""
     if crossed:
         return crossed[0].kind
     if t_slip is None:

@@ -128,9 +128,9 @@ def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
 
 def speed_summary(run, **kw) -> dict:
     """{"max_speed" (the largest |max_speed| of the fronts, over the catalogue's fit window, bursts
-    included: ``Front.band`` says which band it is in), "supershear_sites" (sites run above c_s, over all fronts), "supershear_fronts" (how many
-    fronts had such a stretch), "burst_sites" (sites broken in bursts faster than every wave speed:
-    near-simultaneous breaks, no speed)}."""
+    included: ``Front.band`` says which band it is in), "supershear_sites" (sites run above c_s, over all
+    fronts), "supershear_fronts" (how many fronts had such a stretch), "burst_sites" (sites broken in
+    bursts faster than every wave speed: near-simultaneous breaks, no speed)}."""
     fronts = run.fronts(**kw)
     speeds = [abs(f.max_speed) for f in fronts if math.isfinite(f.max_speed)]
     return {"max_speed": max(speeds) if speeds else math.nan,
