@@ -1,7 +1,7 @@
 """MkDocs hook: the reference pages generated from the code, so they cannot drift from it.
 
 Named in ``mkdocs.yml`` under ``hooks:``; ``mkdocs build`` runs it, so the
-build command alone makes the whole site.  It adds three pages that exist in
+build command alone makes the whole site.  It adds four pages that exist in
 no file of ``docs/``:
 
   reference/keys.md           every scene key of ``parslip.scene.schema.SCHEMA``
@@ -9,6 +9,7 @@ no file of ``docs/``:
                               builds, found by walking its subparsers (a new
                               subcommand, nested ones included, appears by itself)
   reference/output-format.md  the run file's datasets, from ``parslip.io.contract``
+  reference/front-fields.md   every per-front field of the catalogue, from ``parslip.analysis.fronts.FIELDS``
 
 and the files the site needs that git does not hold:
 
@@ -273,10 +274,26 @@ def output_format_page() -> str:
     return "\n".join(out)
 
 
+def front_fields_page() -> str:
+    """Every per-front field of the catalogue, from its registry (``parslip.analysis.fronts.FIELDS``)."""
+    from parslip.analysis.fronts import FIELDS
+
+    out = ["# Front fields", "",
+           GENERATED_NOTE.format(source="`parslip.analysis.fronts.FIELDS`, filled where each field is defined"),
+           "Each rupture front of `parslip fronts --json` holds these keys, and `run.fronts()` these "
+           "attributes (`front.fate`); the text table shows those with a column.  How the catalogue is "
+           "made: [Analysis](../guide/analysis.md).  Null (None) where a value is missing.", "",
+           "| field | units | table column | defined in | meaning |", "| --- | --- | --- | --- | --- |"]
+    for f in FIELDS.values():
+        out.append(f"| `{f.name}` | {_cell(f.units)} | {_cell(f.col or '')} | `{f.source}` | {_cell(f.doc)} |")
+    return "\n".join(out) + "\n"
+
+
 PAGES = {
     "reference/keys.md": keys_page,
     "reference/cli.md": cli_page,
     "reference/output-format.md": output_format_page,
+    "reference/front-fields.md": front_fields_page,
 }
 
 

@@ -18,6 +18,7 @@ import numpy as np
 from parslip.analysis import rupture, table
 from parslip.analysis.figures import pyplot, save
 from parslip.analysis.friction import slip_events
+from parslip.analysis.fronts import wave_speeds
 from parslip.analysis.results import Run
 from parslip.io.contract import EVENT_FORM as FORM
 
@@ -64,7 +65,7 @@ def reformed_before_crossed(run, f) -> int:
 def precursors_study(d):
     rows, pts = [], []
     for row, run in points(d, "precursors"):
-        ev = slip_events(run.interface, run.fronts())
+        ev = slip_events(run)
         pre_all = run.precursors()
         t, mu = run.interface["t"], run.interface["mu"]
         pre = [(p.arrest_length, float(mu[min(int(np.searchsorted(t, p.arrest_time)), len(t) - 1)]))
@@ -85,9 +86,9 @@ def barriers_study(d):
         lo, hi, db = patch_of(run)
         fr = run.fronts()
         f = fr[0] if fr else None
-        res = rupture.through_patch(f, lo, hi, c_l=run.events["c_l"]) if f is not None and math.isfinite(lo) \
+        res = rupture.through_patch(f, lo, hi, c_l=wave_speeds(run)["c_max"]) if f is not None and math.isfinite(lo) \
             else {"before": math.nan, "inside": math.nan, "after": math.nan, "through": True, "bursts": 0}
-        beyond = [x for x in rupture.daughters(fr) if math.isfinite(hi) and x["mother"] == 0 and x["x"] >= hi]
+        beyond = [x for x in rupture.daughters(run) if math.isfinite(hi) and x["mother"] == 0 and x["x"] >= hi]
         rows.append({"point": row["point"], "drive.mode": row["drive.mode"],
                      "patch delta_b": db if math.isfinite(db) else 0.7,
                      "first front kind": f.kind if f else "-", "v before": res["before"], "v inside": res["inside"],
@@ -101,8 +102,8 @@ def supershear_study(d):
     rows = []
     for row, run in points(d, "supershear"):
         fr = run.fronts()
-        sp = rupture.speed_summary(fr)
-        s = rupture.andrews_s(run.interface, fr[0]) if fr else {"S": math.nan}
+        sp = rupture.speed_summary(run)
+        s = rupture.andrews_s(run, fr[0]) if fr else {"S": math.nan}
         lo, hi, db = patch_of(run)
         c_l = run.events["c_l"]
         v1 = abs(fr[0].mean_speed) if fr else math.nan
@@ -111,7 +112,7 @@ def supershear_study(d):
                      "delta_b": row["interface.delta_b"], "kx": row["interface.kx"],
                      "first mean v": v1 if v1 <= c_l else math.nan, "max v": sp["max_speed"],
                      "supershear sites": sp["supershear_sites"], "supershear fronts": sp["supershear_fronts"],
-                     "burst sites": sp["burst_sites"], "daughters": len(rupture.daughters(fr)), "S": s["S"],
+                     "burst sites": sp["burst_sites"], "daughters": len(rupture.daughters(run)), "S": s["S"],
                      "n_fronts": len(fr), "scene": row["scene"], "commit": row["commit"]})
     return rows
 

@@ -5,6 +5,7 @@
 import argparse
 import os
 
+import parslip
 from parslip import analysis
 
 p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -12,5 +13,5 @@ p.add_argument("h5")
 p.add_argument("--png")
 a = p.parse_args()
 png = a.png or os.path.splitext(a.h5)[0] + "_spacetime.png"
-analysis.spacetime_png(analysis.load_interface(a.h5), png, os.path.basename(a.h5))
+analysis.spacetime_png(parslip.open(a.h5).interface, png, os.path.basename(a.h5))
 print(png)

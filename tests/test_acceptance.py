@@ -10,6 +10,7 @@ import os
 
 import pytest
 
+import parslip
 from parslip import analysis
 from parslip.cli import main
 
@@ -22,17 +23,17 @@ def _run(tmp_path, name, *sets):
     for s in sets:
         args += ["--set", s]
     assert main(args) == 0
-    return analysis.load_interface(str(out))
+    return parslip.open(str(out))
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name,edge,direction", [("push", 0.0, 1), ("pull", 1.0, -1)])
 def test_pulses_nucleate_at_the_driven_edge(tmp_path, name, edge, direction):
-    iface = _run(tmp_path, name, "drive.duration=27.0", "output.snapshots=0")
-    t0, x0 = analysis.first_break(iface)
+    run = _run(tmp_path, name, "drive.duration=27.0", "output.snapshots=0")
+    t0, x0 = analysis.first_break(run.interface)
     assert 4.0 < t0 < 6.5
     assert all(abs(x - edge) < 0.02 for x in x0)
-    fr = [f for f in analysis.fronts(iface) if abs(f.x_start - edge) < 0.05]
+    fr = [f for f in run.fronts() if abs(f.x_start - edge) < 0.05]
     assert len(fr) >= 2
     assert all(f.direction == direction for f in fr)
     assert all(f.speed < 0.05 for f in fr)                         # slow: v << c_r
@@ -42,11 +43,11 @@ def test_pulses_nucleate_at_the_driven_edge(tmp_path, name, edge, direction):
 
 @pytest.mark.slow
 def test_shear_gives_one_late_fast_crack(tmp_path):
-    iface = _run(tmp_path, "shear", "drive.duration=73.0", "output.snapshots=0")
-    t0, x0 = analysis.first_break(iface)
+    run = _run(tmp_path, "shear", "drive.duration=73.0", "output.snapshots=0")
+    t0, x0 = analysis.first_break(run.interface)
     assert 55.0 < t0 < 75.0
     assert min(x0) < 0.05                                           # starts at the rear edge
-    fr = analysis.fronts(iface)
+    fr = run.fronts()
     assert fr and fr[0].direction == 1 and fr[0].sites == 100
     assert fr[0].speed > 0.7                                        # near c_r
 
@@ -58,9 +59,9 @@ def test_float32_keeps_the_push_scene_within_one_percent(tmp_path):
     res = {}
     for prec in ("float64", "float32"):
         (tmp_path / prec).mkdir()
-        iface = _run(tmp_path / prec, "push", "drive.duration=33.0", "output.snapshots=0", f"time.precision={prec}")
-        t0, _ = analysis.first_break(iface)
-        fr = [f for f in analysis.fronts(iface) if f.x_start < 0.05]
+        run = _run(tmp_path / prec, "push", "drive.duration=33.0", "output.snapshots=0", f"time.precision={prec}")
+        t0, _ = analysis.first_break(run.interface)
+        fr = [f for f in run.fronts() if f.x_start < 0.05]
         res[prec] = (t0, fr[1].t_start - fr[0].t_start, fr[2].t_start - fr[1].t_start)
     for a, b in zip(res["float64"], res["float32"]):
         assert b == pytest.approx(a, rel=0.01), res

@@ -6,6 +6,7 @@ initial state must give every frame's ``intact`` and ``partner``), the engine's 
 event records written by hand whose tip speeds are known exactly.
 """
 import importlib
+import math
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ import pytest
 import parslip
 from helpers import SMALL, blank, datasets, require, run_cli, small_toml
 F = importlib.import_module("parslip.analysis.fronts")
+from parslip.analysis.results import Run
 from parslip.io.contract import EVENT_BREAK, EVENT_FORM
 
 MODES = ("push", "pull", "shear")
@@ -128,7 +130,7 @@ def test_a_front_at_a_known_speed_is_measured_to_the_time_step():
     within the step's rounding, while the frames (every 1/50 of the run) cannot resolve it."""
     v, dx = 0.37, 1.0 / L_SITES
     iface = _record([(int(round(s * dx / (v * DT))), s) for s in range(20, 180)])
-    (f,) = F.fronts(iface)
+    (f,) = Run.from_arrays(iface).fronts()
     assert f.direction == 1 and f.resolution == DT and f.fit_sites == 5
     assert f.steady_speed == pytest.approx(v, rel=2e-3)
     assert np.abs(f.tip["v"] - v).max() < 0.02 * v
@@ -139,7 +141,8 @@ def test_a_front_at_a_known_speed_is_measured_to_the_time_step():
 def test_supershear_is_flagged_and_a_burst_is_no_speed():
     """A front that runs at 0.5 c_r, then at 1.5 c_r (between c_s = 1.1 and c_l = 1.8) over sites 100-139,
     then breaks 10 sites in one step: the fast stretch is flagged supershear with its sites and speed; the
-    burst is reported with its sites and steps and enters no speed."""
+    burst is reported with its sites, steps and fitted speed and enters no local speed; the front's
+    max_speed is that fit, in the band "burst"."""
     dx = 1.0 / L_SITES
     t, breaks = 0.0, []
     for s in range(10, 140):
@@ -151,12 +154,13 @@ def test_supershear_is_flagged_and_a_burst_is_no_speed():
     for s in range(150, 170):
         breaks.append((int(round(t / DT)), s))
         t += dx / 0.5
-    (f,) = F.fronts(_record(breaks))
+    (f,) = Run.from_arrays(_record(breaks)).fronts()
     (ss,) = [b for b in f.supershear if b["sites"][0] <= 120 <= b["sites"][1]]
     assert ss["max_speed"] == pytest.approx(1.5, rel=0.05) and ss["n_sites"] >= 20
     assert f.bursts and all(136 <= b["sites"][0] and b["sites"][1] <= 153 for b in f.bursts)   # fits that hold it
     assert any(b["n_steps"] <= 2 for b in f.bursts)
-    assert np.nanmax(np.abs(f.tip["v"])) < 1.8 and abs(f.max_speed) < 1.8
+    assert np.nanmax(np.abs(f.tip["v"])) < 1.8                         # no burst fit is a local speed
+    assert f.max_speed == max(b["max_speed"] for b in f.bursts) > 1.8 and f.band == "burst"   # nor dropped
     text = F.table([f])
     assert "supershear" in text and "burst" in text and "exact break steps" in text
 
@@ -166,10 +170,42 @@ def test_event_and_frame_catalogues_agree_on_a_real_run(small_run):
     frame of the other; the events' tips never outrun c_l."""
     run = parslip.open(small_run)
     ev_fr = run.fronts()
-    frame_fr = F.fronts({**run.interface, "events": None})
+    frame_fr = F.fronts(Run.from_arrays({**run.interface, "events": None}, run.scene, run.attrs))
     assert len(ev_fr) == len(frame_fr) >= 3
     dt_frame = float(np.median(np.diff(run.times)))
     for a, b in zip(ev_fr, frame_fr):
         assert a.direction == b.direction and abs(a.nucleation_x - b.nucleation_x) < 1e-9
         assert b.nucleation_time - dt_frame <= a.nucleation_time <= b.nucleation_time + 1e-12
         assert abs(a.max_speed) < run.events["c_l"]
+
+
+def test_each_stretch_of_a_front_is_labelled_with_its_speed_band():
+    """A front that runs 30 sites each at 0.5 c_r, 1.07 c_r (between the lattice's c_R = 1.04 and c_s = 1.1),
+    1.5 c_r (supershear), 4 c_r (above the block's c_l = 1.8, below the substrate's c_l = sqrt(9/8 100) =
+    10.6) and then breaks 10 sites in one step (a fit of 20 c_r: above every wave speed).  Each speed's
+    stretch carries its band, and its speed within it; max_speed is the burst's fit and says so; without the
+    substrate (rigid) the 4 c_r stretch is a burst too."""
+    dx = 1.0 / L_SITES
+    t, breaks = 0.0, []
+    for s in range(10, 160):
+        breaks.append((int(round(t / DT)), s))
+        t += dx / (0.5, 1.07, 1.5, 4.0)[min((s - 10) // 30, 3)] if s < 130 else 0.0
+    breaks += [(int(round(t / DT)) + 1, s) for s in range(160, 170)]
+    attrs = {"c_r": 1.0, "c_surface_born": 1.04}
+    scene = {"lattice.substrate": "elastic", "lattice.bottom_rows": 20, "material.bottom_kn": 100.0,
+             "material.bottom_kt": 0.0}
+    (f,) = Run.from_arrays(_record(breaks), scene, attrs).fronts()
+    assert F.wave_speeds(f.run)["c_max"] == pytest.approx(math.sqrt(9 / 8 * 100))
+    want = {"sub-Rayleigh": 0.5, "c_R to c_s": 1.07, "supershear": 1.5, "above block c_l": 4.0}
+    for band, v in want.items():
+        mid = 10 + 30 * list(want).index(band) + 15            # the middle site of its stretch
+        (st,) = [b for b in f.stretches if b["sites"][0] <= mid <= b["sites"][1]]
+        rel = max(0.02, v * DT / (4 * dx))                     # a step's rounding over the fit's 4 dx
+        assert st["band"] == band and f.tip["v"][mid - 10] == pytest.approx(v, rel=rel)
+        assert F.band_of(st["max_speed"], F.wave_speeds(f.run)) == band
+    assert [b["band"] for b in f.stretches][-1] == "burst"
+    assert f.band == "burst" and f.max_speed == max(b["max_speed"] for b in f.stretches) > 10.6
+    assert sum(b["n_sites"] for b in f.stretches) == f.sites          # every fitted speed is in a band
+    rigid = Run.from_arrays(_record(breaks), {**scene, "lattice.substrate": "rigid"}, attrs).fronts()[0]
+    assert {"above block c_l"} & {b["band"] for b in rigid.stretches} == set()
+    assert F.band_of(4.0, F.wave_speeds(rigid.run)) == "burst"

@@ -100,10 +100,10 @@ def _record(crack=True, edge=True):
 
 def test_static_peak_is_the_largest_mu_before_the_contact_has_slipped_everywhere():
     it, arr = _record()
-    pk = FR.static_peak(it, fn=2.0)
+    pk = FR.static_peak(Run.from_arrays(it, scene={"load.FN": 2.0}))
     # Every site broke once when the crack reached site 29: sites 0-24 and 48-59 broke in precursors,
     # 30-59 in the pulse that left through the edge, 25-29 only in the crack.
-    assert FR.slip_onset(it) == 229
+    assert FR.slip_onset(Run.from_arrays(it)) == 229
     assert pk.slip_onset == pytest.approx(229 * DT) and pk.window == "slip onset"
     assert pk.mu_s == pytest.approx(2.0) and pk.frame == 200 and pk.time == pytest.approx(200 * DT)
     assert it["mu"].max() > 3 * pk.mu_s / 2                  # the sliding regime rises higher: not counted
@@ -115,8 +115,8 @@ def test_static_peak_is_the_largest_mu_before_the_contact_has_slipped_everywhere
 
 def test_without_slip_onset_the_peak_is_the_record_maximum_and_a_bound():
     it, _ = _record(crack=False)
-    pk = FR.static_peak(it)
-    assert FR.slip_onset(it) is None and pk.slip_onset is None and pk.window == "record"
+    pk = FR.static_peak(Run.from_arrays(it))
+    assert FR.slip_onset(Run.from_arrays(it)) is None and pk.slip_onset is None and pk.window == "record"
     assert pk.mu_s == it["mu"].max() and pk.frame == 399 and math.isnan(pk.force)
 
 
@@ -124,25 +124,26 @@ def test_without_slip_onset_the_peak_is_the_record_maximum_and_a_bound():
 def test_place_of_the_peak_relative_to_the_first_break(k_peak, place):
     it, _ = _record()
     it["mu"] = np.exp(-((np.arange(len(it["t"])) - k_peak) / 5.0) ** 2)   # one bump, first break at frame 20
-    pk = FR.static_peak(it)
+    pk = FR.static_peak(Run.from_arrays(it))
     assert pk.frame == k_peak and pk.place == place
     assert pk.after_first_break == pytest.approx((k_peak - 20) * DT)
 
 
 def test_fates_and_precursors_with_their_arrest_lengths():
     it, arr = _record()
-    fr = FR.front_catalogue(it)
-    got = {(round(f.nucleation_time / DT), FR.fate(f, it)) for f in fr}
+    run = Run.from_arrays(it, scene={"load.FN": 1.0})
+    fr = run.fronts()
+    got = {(round(f.nucleation_time / DT), FR.fate(run, f)) for f in fr}
     assert got == {(20, "arrested"), (90, "arrested"), (40, "arrested"), (140, "edge"), (200, "crossed"),
                    (385, "running")}
-    pre = FR.precursors(it, fr)
+    pre = FR.precursors(run)
     assert [(round(p.nucleation_time / DT), p.kind) for p in pre] == [(20, "pulse"), (40, "pulse"), (90, "pulse")]
     x = it["x"]
     for p, sites, tip, last in zip(pre, (10, 12, 25), (9, NS - 12, 24), (arr["p1"], arr["p3"], arr["p2"])):
         assert p.arrest_length == pytest.approx(sites / NS, rel=1e-12)
         assert p.arrest_x == x[tip] and p.arrest_time == pytest.approx(last[-1] * DT)
         assert fr[p.index].nucleation_time == p.nucleation_time
-    obs = FR.observables(it, fn=1.0)
+    obs = FR.observables(run)
     assert (obs["n_fronts"], obs["n_precursors"], obs["n_crossed"], obs["n_running"]) == (6, 3, 1, 1)
     assert obs["rupture_kind"] == "crack" and obs["n_crack"] == 1 and obs["n_pulse"] == 5
     assert obs["precursor_arrest_max"] == pytest.approx(25 / NS)
@@ -151,21 +152,24 @@ def test_fates_and_precursors_with_their_arrest_lengths():
     assert obs["mu_s"] == pytest.approx(2.0) and obs["mu_s_place"] == "after"
 
 
-def test_a_pulse_finished_by_an_edge_burst_crossed_and_the_burst_merged():
+def test_a_pulse_finished_by_an_edge_burst_was_relayed_and_the_burst_merged():
     """As under pull: a slow pulse from x = 1 reaches site 6 at frame 169 while the last six bonds at
-    x = 0 break from the edge toward it (frames 166-171).  The detector sees two fronts; the pulse
-    crossed (the rest of the contact broke as it arrived), the burst ran into the pulse: neither is
-    a precursor."""
+    x = 0 break from the edge toward it (frames 166-171).  The detector sees two fronts; the pulse was
+    relayed (its own tip stopped, the rest of the contact broke as it arrived: the contact was crossed,
+    and it counts as the crossing front), the burst ran into the pulse: neither is a precursor."""
     it = blank(400)
     draw(it, 10, NS - 1, -1, 3, 2, 0.001, sites=NS - 6)
     draw(it, 166, 0, +1, 1, 1, 0.001, sites=6, crack=True)
     it["intact"][200:] = 1
-    fr = FR.front_catalogue(it)
-    assert [(f.direction, f.sites) for f in fr] == [(-1, NS - 6), (1, 6)]
-    assert [FR.fate(f, it) for f in fr] == ["crossed", "merged"]
-    assert FR.precursors(it, fr) == []
     it["mu"] = np.zeros(400)
-    assert FR.observables(it)["rupture_kind"] == "pulse" and FR.slip_onset(it) == 171
+    run = Run.from_arrays(it)
+    fr = run.fronts()
+    assert [(f.direction, f.sites) for f in fr] == [(-1, NS - 6), (1, 6)]
+    assert [f.fate for f in fr] == ["relayed", "merged"]
+    assert [FR.crossed_contact(run, f) for f in fr] == [True, False]
+    assert FR.precursors(run) == []
+    obs = FR.observables(run)
+    assert obs["rupture_kind"] == "pulse" and obs["n_crossed"] == 1 and FR.slip_onset(run) == 171
 
 
 def test_a_front_still_moving_when_the_record_ends_is_not_a_precursor():
@@ -174,9 +178,10 @@ def test_a_front_still_moving_when_the_record_ends_is_not_a_precursor():
     for nf, want in ((100, "running"), (200, "arrested")):
         it = blank(nf)
         draw(it, 40, 0, +1, 3, 2, 0.0, sites=19)
-        (f,) = FR.front_catalogue(it)
-        assert FR.fate(f, it) == want
-        pre = FR.precursors(it)
+        run = Run.from_arrays(it)
+        (f,) = run.fronts()
+        assert f.fate == want
+        pre = FR.precursors(run)
         assert len(pre) == (want == "arrested")
         if pre:
             assert pre[0].arrest_length == pytest.approx(19 / NS) and pre[0].arrest_time == pytest.approx(94 * DT)
@@ -250,20 +255,20 @@ def test_slip_events_are_the_drops_of_mu_with_the_precursors_before_them():
     threshold above the drop finds none; a record that falls at its end holds an open event."""
     it, arr = _record()
     it["loader"] = np.arange(400) * 1e-3
-    fr = FR.front_catalogue(it)
-    ev = FR.slip_events(it, fr)
+    run = Run.from_arrays(it)
+    ev = FR.slip_events(run)
     assert len(ev) == 1
     e = ev[0]
     assert (round(e.t_start / DT), round(e.t_end / DT)) == (200, 259)
     assert (e.mu_before, e.mu_after) == (pytest.approx(2.0), pytest.approx(0.5)) and e.drop == pytest.approx(1.5)
     assert e.loader == pytest.approx(0.2)
-    pre = FR.precursors(it, fr)
+    pre = FR.precursors(run)
     assert e.precursors == [p.index for p in pre] and len(pre) == 3
     assert e.precursor_lengths == pytest.approx([p.arrest_length for p in pre])
     assert e.precursor_mu == pytest.approx([0.01 * round(p.arrest_time / DT) for p in pre])
-    assert FR.slip_events(it, fr, min_drop=0.45) == []               # 1.5 < 0.45 * 3.5
+    assert FR.slip_events(run, min_drop=0.45) == []               # 1.5 < 0.45 * 3.5
     it2 = {k: (v[:240] if isinstance(v, np.ndarray) and v.shape[:1] == (400,) else v) for k, v in it.items()}
-    open_ev = FR.slip_events(it2, [])
+    open_ev = FR.slip_events(Run.from_arrays(it2))
     assert len(open_ev) == 1 and round(open_ev[0].t_end / DT) == 239     # still falling when the record ends
 
 

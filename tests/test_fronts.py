@@ -13,16 +13,22 @@ import pytest
 
 import parslip
 from helpers import DT, NS, blank, draw
+from parslip.analysis.results import Run
 from parslip.cli import main
 
 F = importlib.import_module("parslip.analysis.fronts")   # the module (parslip.analysis.fronts is also the function)
+
+
+def catalogue(iface, **kw):
+    """The front catalogue of a drawn record (a run held in memory)."""
+    return Run.from_arrays(iface).fronts(**kw)
 
 
 def test_two_opposite_pulses_recovered_exactly():
     iface = blank(300)
     a_arr = draw(iface, 10, 0, +1, 2, 3, 0.01, sites=40, slip_v=0.002)
     b_arr = draw(iface, 40, NS - 1, -1, 3, 2, 0.02, sites=30)
-    fr = F.fronts(iface)
+    fr = catalogue(iface)
     assert len(fr) == 2
     a, b = fr
     dx = 1 / NS
@@ -46,7 +52,7 @@ def test_trailing_pulses_from_one_edge_stay_separate():
     iface = blank(400)
     for k0 in (0, 60, 120):                         # three pulses from x = 0, 60 frames apart
         draw(iface, k0, 0, +1, 3, 2, 0.01)
-    fr = F.fronts(iface)
+    fr = catalogue(iface)
     assert [f.nucleation_time for f in fr] == pytest.approx([0.0, 3.0, 6.0])
     assert all(f.direction == 1 and f.kind == "pulse" and f.sites == NS and f.width == 2 for f in fr)
     assert all(f.mean_speed == pytest.approx((1 / NS) / (3 * DT)) for f in fr)
@@ -58,7 +64,7 @@ def test_trailing_pulses_from_one_edge_stay_separate():
 def test_crack_keeps_everything_behind_broken():
     iface = blank(150)
     arr = draw(iface, 20, 0, +1, 1, 1, 0.03, crack=True)
-    (f,) = F.fronts(iface)
+    (f,) = catalogue(iface)
     assert f.kind == "crack" and f.direction == 1
     assert f.mean_speed == pytest.approx((1 / NS) / DT)
     np.testing.assert_array_equal(f.tip["w"], np.arange(1, NS + 1))     # the broken zone grows with the tip
@@ -72,7 +78,7 @@ def test_fast_backward_crack_is_one_front():
     k0, s0 = 10, NS - 1
     for k in range(k0, 60):
         iface["intact"][k, max(0, s0 - 3 * (k - k0) - 2):] = 0
-    fr = F.fronts(iface)
+    fr = catalogue(iface)
     assert len(fr) == 1
     f = fr[0]
     assert f.direction == -1 and f.kind == "crack" and f.sites == NS
@@ -87,7 +93,7 @@ def test_acceleration_site():
     t_arr = [4 * j for j in range(31)] + [120 + j for j in range(1, 30)]
     for j, k in enumerate(t_arr):
         iface["intact"][k:k + (4 if j <= 30 else 1), j] = 0
-    (f,) = F.fronts(iface)
+    (f,) = catalogue(iface)
     dx = 1 / NS
     assert f.tip["v"][5] == pytest.approx(dx / (4 * DT)) and f.tip["v"][-5] == pytest.approx(dx / DT)
     assert iface["x"][29] <= f.accel_x <= iface["x"][33]
@@ -98,7 +104,7 @@ def test_acceleration_site():
 def test_short_flicker_is_not_a_front():
     iface = blank(50)
     iface["intact"][5:8, 10:13] = 0                 # three sites, below min_sites
-    assert F.fronts(iface) == []
+    assert catalogue(iface) == []
     tb, xb = F.first_break(iface)
     assert tb == 5 * DT and list(xb) == list(iface["x"][10:13])
 

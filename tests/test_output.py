@@ -7,6 +7,7 @@ import pytest
 
 from helpers import small_toml
 from parslip import analysis
+from parslip.analysis.results import Run
 from parslip.cli import main
 from parslip.io.contract import read_status
 
@@ -112,7 +113,7 @@ def test_front_catalogue_on_a_drawn_pattern():
         s2 = ns - 1 - (k - 20)
         if 20 <= k and 25 <= s2:
             intact[k, s2] = 0                   # backward pulse from frame 20
-    fr = analysis.fronts({"t": t, "x": x, "intact": intact})
+    fr = analysis.fronts(Run.from_arrays({"t": t, "x": x, "intact": intact}))
     assert len(fr) == 2
     a, b = fr
     assert a.direction == 1 and a.x_start == pytest.approx(x[0]) and a.t_start == 0.0

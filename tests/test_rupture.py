@@ -1,6 +1,7 @@
 """The interface studies' measures (``analysis.rupture``) on records drawn by hand, where each answer is
-known: a daughter front born ahead of a running one, a front that slows in a patch and stops at it, and
-Andrews' S of a traction history made to give S = 1.5."""
+known: a daughter front born ahead of a running one, a front that slows in a patch and stops at it,
+Andrews' S of traction histories made to give S = 2 and 2/0.7, and the shear-traction drop along a path."""
+import json
 import math
 
 import numpy as np
@@ -8,26 +9,29 @@ import pytest
 
 from helpers import DT, NS, blank, draw
 from parslip.analysis import rupture
-from parslip.analysis.fronts import fronts
+from parslip.analysis.fronts import FIELDS, table
+from parslip.analysis.results import Run
+from parslip.io.contract import EVENT_BREAK, EVENT_FORM
 
 
 def test_a_front_born_ahead_of_a_running_tip_is_its_daughter():
     it = blank(4 * NS + 40)
     draw(it, 10, 0, +1, 4, 2, 0.001)                 # the mother: a site every 4 frames from x = 0
     draw(it, 30, 30, +1, 1, 2, 0.001, sites=10)      # born at site 30 at frame 30, the mother's tip at site 5
-    fr = fronts(it)
-    d = rupture.daughters(fr)
+    run = Run.from_arrays(it)
+    fr = run.fronts()
+    d = rupture.daughters(run)
     assert len(d) == 1
     mother, daughter = fr[d[0]["mother"]], fr[d[0]["daughter"]]
     assert round(mother.nucleation_time / DT) == 10 and round(daughter.nucleation_time / DT) == 30
     assert d[0]["ahead"] == pytest.approx((30 - 5) / NS)
-    assert rupture.daughters(fr, min_gap=0.5) == []
+    assert rupture.daughters(run, min_gap=0.5) == []
 
 
 def test_a_front_slowed_and_stopped_by_a_patch():
     it = blank(300)
     arr = draw(it, 0, 0, +1, 1, 2, 0.001, sites=int(0.5 * NS))    # one site a frame: 1 site/DT
-    f = fronts(it)[0]
+    f = Run.from_arrays(it).fronts()[0]
     res = rupture.through_patch(f, 0.4, 0.6)
     assert res["through"] is False and math.isnan(res["after"])
     assert res["before"] == pytest.approx(res["inside"]) == pytest.approx((1 / NS) / DT)
@@ -36,21 +40,76 @@ def test_a_front_slowed_and_stopped_by_a_patch():
     assert math.isnan(slow["inside"]) and slow["bursts"] == 2
 
 
-def test_andrews_s_of_a_known_traction_history():
-    """Every site sits at tau_0 = 1 until the tip comes, peaks at 2.5 the frame before it breaks (but the
-    nucleation site, which breaks first), and is at 0 once the front has passed: tau_peak = (1 + 59 x 2.5)
-    / 60 and S = (tau_peak - 1) / (1 - 0), with either sign of the traction."""
+def _history(pulse_width=None, tau_0=1.0, ramp=2.5, tau_after=0.4):
+    """A front from site 0 at frame 20, one site a frame (a crack, or a pulse ``pulse_width`` frames wide);
+    each site carries ``tau_0`` until the frame before its break, ``ramp`` in that frame, nothing while
+    its bond is broken and ``tau_after`` once it re-forms.  With its event record: each break at the step
+    just before the frame that first shows it (frame k holds step k)."""
+    it = blank(120)
+    crack = pulse_width is None
+    arr = draw(it, 20, 0, +1, 1, 1000 if crack else pulse_width, 0.001, crack=crack)
+    sxy = np.full((120, NS), tau_0)
+    for s, k in enumerate(arr):
+        sxy[k - 1, s] = ramp if s else tau_0
+        sxy[k:, s] = tau_after
+    it["sxy"] = sxy * it["intact"]                         # the interface traction of a broken bond is 0
+    it["step"] = np.arange(120)
+    broken = it["intact"] == 0
+    k, site = np.nonzero(broken[1:] != broken[:-1])        # every change the frames show, one step earlier
+    kind = np.where(broken[k + 1, site], EVENT_BREAK, EVENT_FORM).astype(np.uint8)
+    it["events"] = {"step": k, "time": k * DT, "site": site, "kind": kind, "partner": site, "site_column0": 0,
+                    "dt": DT, "c_s": math.inf, "c_l": math.inf}
+    return it, arr
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_andrews_s_from_the_break_traction_of_a_known_history(sign):
+    """tau_0 = 1 before the front, 3.0 at each break step (the event's traction; the frames show only the
+    2.5 of the frame before), nothing behind a crack's tip: S = (3 - 1) / (1 - 0) = 2, recovered within 2 %
+    per site and as the median, whichever the sign of the traction; without the events' traction the
+    frames give (2.5 - 1) / 1 and say so."""
+    it, arr = _history()
+    it["sxy"] *= sign
+    it["events"]["traction"] = np.where(it["events"]["kind"] == EVENT_BREAK, 3.0 * sign, 0.0)
+    run = Run.from_arrays(it)
+    (f,) = run.fronts()
+    got = rupture.andrews_s(run, f)
+    assert got["peak_from"] == "events" and got["S"] == pytest.approx(2.0, rel=0.02)
+    assert (got["tau_0"], got["tau_peak"], got["tau_res"]) == (pytest.approx(1.0), pytest.approx(3.0), 0.0)
+    assert np.nanmedian(got["sites"]["S"]) == pytest.approx(2.0, rel=0.02) and f.andrews_s == got["S"]
+    del it["events"]["traction"]
+    (f,) = Run.from_arrays(it).fronts()
+    got = rupture.andrews_s(f.run, f)
+    assert got["peak_from"] == "frames" and got["S"] == pytest.approx(1.5, rel=0.02)
+
+
+def test_andrews_s_residual_is_the_mean_behind_the_tip_with_broken_bonds_at_zero():
+    """A pulse 5 frames wide: over the window of 1 l/c_r = 20 frames behind the tip a site is broken for 5
+    frames (0) and re-formed at 0.4 for 15: tau_res = 0.4 x 15/20 = 0.3, so S = (3 - 1) / (1 - 0.3)."""
+    it, arr = _history(pulse_width=5)
+    it["events"]["traction"] = np.where(it["events"]["kind"] == EVENT_BREAK, 3.0, 0.0)
+    (f,) = Run.from_arrays(it).fronts()
+    got = rupture.andrews_s(f.run, f)
+    assert got["tau_res"] == pytest.approx(0.3) and got["S"] == pytest.approx(2.0 / 0.7, rel=0.02)
+    assert f.kind == "pulse" and f.andrews_s == pytest.approx(2.0 / 0.7, rel=0.02)
+
+
+def test_traction_drop_of_a_known_traction_history():
+    """Each site carries tau_0 = 1 + s/100 until the frame that shows its bond broken, then 0.25: the drop
+    at site s is 0.75 + s/100, and its mean over the crack's path (sites 0-59) is 0.75 + 0.295, whichever
+    the sign of the traction.  The field is registered: it reads as front.traction_drop, is a key of the
+    front's JSON and a column of the table."""
     it = blank(120)
     arr = draw(it, 20, 0, +1, 1, 1000, 0.001, crack=True)
-    sxy = np.ones((120, NS))
+    sxy = np.empty((120, NS))
     for s, k in enumerate(arr):
-        if s:
-            sxy[k - 1, s] = 2.5
-        sxy[k:, s] = 0.0
-    peak = (1 + (NS - 1) * 2.5) / NS
+        sxy[:k, s], sxy[k:, s] = 1 + s / 100, 0.25
+    want = 0.75 + np.mean(np.arange(NS)) / 100
     for sign in (1.0, -1.0):
         it["sxy"] = sign * sxy
-        f = fronts(it)[0]
-        got = rupture.andrews_s(it, f)
-        assert got["S"] == pytest.approx(peak - 1.0) and got["tau_0"] == pytest.approx(1.0)
-        assert got["tau_peak"] == pytest.approx(peak) and got["tau_res"] == pytest.approx(0.0)
+        (f,) = Run.from_arrays(it).fronts()
+        assert f.traction_drop == pytest.approx(want, rel=1e-12)
+        assert json.loads(json.dumps(f.to_dict()))["traction_drop"] == pytest.approx(want, rel=1e-12)
+    assert FIELDS["traction_drop"].units == "rho c_r^2" and "dtau" in table([f])
+    it.pop("sxy")
+    assert Run.from_arrays(it).fronts()[0].traction_drop is None

@@ -1,6 +1,16 @@
-"""Reading runs back: rupture fronts, friction observables (static peak, precursors), results object,
-figures, a sweep's summary table and its maps, paper comparison, accuracy.  Never imports the engine."""
-from .fronts import Front, break_events, first_break, fronts, load_interface  # noqa: F401
+"""Reading runs back: generic measures grouped by quantity, each a function of the run (``results.Run``,
+``parslip.open``'s object) that reads no file and draws nothing:
+
+  fronts      the one front detector, the catalogue and its registry of per-front fields, front speeds
+  friction    mu(t), the static peak, what became of each front (fate), precursors, stick-slip events
+  rupture     measures of rupture as a crack: Andrews' S, daughters, patches, the shear-traction drop
+  slip        slip at a site: slip velocity, the slip a front's passage carries
+
+Beside them: ``results`` (the run object), ``table`` (a sweep's summary table), ``provenance`` (what a
+written picture records).  Importing the package registers every per-front field (``fronts.FIELDS``).
+Never imports the engine."""
+from . import friction, rupture, slip  # noqa: F401  (their per-front fields register on import)
+from .fronts import Front, first_break, fronts  # noqa: F401
 from .friction import summary  # noqa: F401
 
 

@@ -411,7 +411,7 @@ def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> lis
 
 # --- friction -----------------------------------------------------------------------
 
-FATE_MARKERS = {"crossed": "o", "edge": "s", "merged": "v", "arrested": "X", "running": ">"}
+FATE_MARKERS = {"crossed": "o", "edge": "s", "relayed": "D", "merged": "v", "arrested": "X", "running": ">"}
 
 
 def fig_friction(run, out_dir: str) -> list[str]:
@@ -420,10 +420,9 @@ def fig_friction(run, out_dir: str) -> list[str]:
     Top: mu(t) (black), the drive's force over F_N (grey: it exceeds mu by the damping drag on the block),
     the first break (dotted), the slip onset (dashed; ``analysis.friction``), the static peak mu_s (star)
     and each front's nucleation on the curve, its marker telling its fate (o crossed, s left through an
-    edge, v merged with another front, X arrested: a precursor, > still running at the record's end).
+    edge, D relayed, v merged with another front, X arrested: a precursor, > still running at the record's end).
     Bottom: each front's tip x/l against t, in the same colours, its arrest marked X.
     """
-    from .friction import fate
     if "mu" not in run.interface:
         log.info("friction figure skipped: the record holds no /interface/mu (written before parslip recorded "
                  "the friction force)")
@@ -433,7 +432,7 @@ def fig_friction(run, out_dir: str) -> list[str]:
     fn = run.scene.get("load.FN") or float("nan")
     pk = run.static_peak
     fr = run.fronts()
-    fates = [fate(f, run.interface) for f in fr]
+    fates = run.fates()
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": (3, 2)})
     ax.plot(t, mu, color="k", lw=1, label=r"$\mu = -F_T/F_N$")
     if fn > 0:
@@ -474,14 +473,14 @@ def fig_stick_slip(run, out_dir: str) -> list[str]:
     trough, and the precursors (fronts arrested inside the contact) marked at their arrest; beside it
     each event's mu before and after against the loader's displacement, and every precursor's arrest
     length against F_T/F_N at its arrest."""
-    from .friction import MIN_DROP, mu as mu_of, slip_events
+    from .friction import MIN_DROP, mu as mu_of
     if "mu" not in run.interface:
         log.info("stick-slip figure skipped: the record holds no /interface/mu")
         return []
     plt = pyplot()
     iface = run.interface
-    t, m = iface["t"], mu_of(iface)
-    events = slip_events(iface, run.fronts())
+    t, m = iface["t"], mu_of(run)
+    events = run.slip_events()
     fig, (ax, bx, cx) = plt.subplots(1, 3, figsize=(13, 3.8), gridspec_kw={"width_ratios": [2.2, 1, 1]})
     ax.plot(t, m, color="k", lw=0.7)
     for e in events:

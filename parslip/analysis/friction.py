@@ -1,13 +1,18 @@
-"""Friction observables of a run: mu(t), the static peak mu_s, what each front did, the precursors.
+"""Friction and stick-slip of a run: mu(t), the static peak mu_s, what each front did, the precursors.
 
-Responsible for what the run's friction record says on top of the front
-catalogue (``analysis.fronts``): the friction coefficient mu(t) = -F_T / F_N
-the interface mobilises (``/interface/mu``, recorded with every frame), the
-onset of sliding, the static peak mu_s, the fate of each front (it crossed
-the contact, arrested inside it, left through an edge, or was still running
-when the record ended) and the precursors with their arrest lengths.  The
-one-row digest of all this, ``observables``, is what a sweep's summary
-table holds per point.
+Every measure is a function of the run (``analysis.results.Run``); the catalogue options (``max_gap``,
+``min_sites``, ``window``) pass through to ``run.fronts``.
+
+  mu(run)                        mu(t) = -F_T / F_N per frame (``/interface/mu``)
+  slip_onset(run)                the frame by which every bond had broken once
+  static_peak(run)               mu_s, its time, window and place relative to the first break (``StaticPeak``)
+  fate (per-front field)         what became of a front: crossed, edge, relayed, merged, arrested, running
+  crossed_contact(run, front)    whether its crossing of the contact completed (by its tip, or relayed)
+  arrest_length (per-front field)  the length of contact an arrested front broke, l
+  precursors(run)                the fronts that arrested inside the contact (``Precursor``)
+  slip_events(run, min_drop)     the stick-slip record's drops of mu (``SlipEvent``)
+  observables(run)               the one-row digest a sweep's summary table holds per point
+  summary(run), summary_lines(run), slip_event_lines(events)   the same as text
 
 Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
 
@@ -34,13 +39,15 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
                   "after" it; mu at the first break is kept too.
   fate            of a front, from its tip trajectory (the sites it reached) and the bonds ahead of it,
                   the first rule that holds:
-                    crossed   it broke bonds from one edge of the contact to the other (it nucleated
-                              within ``edge_sites`` sites of one edge and reached the other), or it
-                              nucleated at an edge and every bond between its last site and the far
-                              edge broke within ``max_gap`` of its last advance: it met another front
-                              that finished the crossing (a pulse from the driven edge that sets off
-                              the last few bonds at the far edge at once, seen under pull);
-                    edge      the same from a nucleation inside the contact: it reached the far edge;
+                    crossed   its own tip broke bonds from one edge of the contact to the other (it
+                              nucleated within ``edge_sites`` sites of one edge and reached the other);
+                    edge      the same from a nucleation inside the contact: its tip reached the far edge;
+                    relayed   its tip stopped short of the far edge, but every bond between its last site
+                              and the far edge broke within ``max_gap`` of its last advance: another front
+                              finished its way (a pulse from the driven edge that sets off the last few
+                              bonds at the far edge at once, seen under pull).  Its own tip did not get
+                              through, so a patch's ``through`` and its fate agree; the contact was
+                              crossed all the same (``crossed_contact``);
                     merged    the bond just ahead of its tip was broken when it last advanced or broke
                               within ``max_gap``: it ran into another front's broken zone;
                     arrested  its tip stopped inside the contact with the bond ahead holding, and it did
@@ -54,10 +61,11 @@ Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
                   included: |x_arrest - x_nucleation| + 1/sites (l).  For a front from an edge, the
                   distance from that edge to where it stopped.
   rupture kind    of the run: the kind ("pulse" or "crack", ``fronts.Front.kind``) of the first front
-                  that crossed the contact.  When none crossed but the contact slipped everywhere all the
-                  same (a fast rupture the detector saw in pieces, or fronts that shared the contact
-                  out), the kind of the fronts that nucleated up to the slip onset, "mixed" if they
-                  differ; "none" when the contact never slipped everywhere and no front crossed.
+                  that crossed the contact (``crossed_contact``: by its own tip, or relayed from an
+                  edge).  When none crossed but the contact slipped everywhere all the same (a fast
+                  rupture the detector saw in pieces, or fronts that shared the contact out), the kind
+                  of the fronts that nucleated up to the slip onset, "mixed" if they differ; "none"
+                  when the contact never slipped everywhere and no front crossed.
   mean speed      of a front, (x_last - x_first)/(t_last - t_first) (``Front.mean_speed``); the table
                   gives |mean speed| of the first crossing front and the mean |mean speed| of all fronts.
   slip per event  the mean over the fronts of the slip each carries (``Front.slip_u``, the median over
@@ -70,7 +78,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fronts import MAX_GAP, Front, first_break, fronts as front_catalogue, table
+from .fronts import Front, first_break, front_field, json_value, table
 
 EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one site) of an edge has reached it
 
@@ -78,7 +86,7 @@ EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one s
 def edge_sites(ns: int) -> int:
     """Sites at each end of a contact of ``ns`` sites that count as its edge: 2 %, at least one."""
     return max(1, int(round(EDGE_FRACTION * ns)))
-FATES = ("crossed", "edge", "merged", "arrested", "running")
+FATES = ("crossed", "edge", "relayed", "merged", "arrested", "running")
 
 
 @dataclass
@@ -97,7 +105,7 @@ class StaticPeak:
     force: float                    # F_s = mu_s * F_N, the static friction force
 
     def to_dict(self) -> dict:
-        return {k: _clean(v) for k, v in self.__dict__.items()}
+        return {k: json_value(v) for k, v in self.__dict__.items()}
 
 
 @dataclass
@@ -113,15 +121,7 @@ class Precursor:
     front: Front
 
     def to_dict(self) -> dict:
-        return {k: _clean(v) for k, v in self.__dict__.items() if k != "front"}
-
-
-def _clean(v):
-    if isinstance(v, (np.floating, np.integer)):
-        v = v.item()
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
+        return {k: json_value(v) for k, v in self.__dict__.items() if k != "front"}
 
 
 @dataclass
@@ -141,20 +141,21 @@ class SlipEvent:
     precursor_mu: list              # mu at each one's arrest, F_T/F_N
 
     def to_dict(self) -> dict:
-        return {k: (list(v) if isinstance(v, list) else _clean(v)) for k, v in self.__dict__.items()}
+        return {k: (list(v) if isinstance(v, list) else json_value(v)) for k, v in self.__dict__.items()}
 
 
-def mu(iface: dict) -> np.ndarray:
+def mu(run) -> np.ndarray:
     """mu(t) = -F_T / F_N per frame (``/interface/mu``); NaN for a record written without forces."""
+    iface = run.interface
     if "mu" in iface:
         return np.asarray(iface["mu"], float)
     return np.full(len(iface["t"]), np.nan)
 
 
-def slip_onset(iface: dict) -> int | None:
+def slip_onset(run) -> int | None:
     """The first frame by which every interface bond but the ``edge_sites`` at each end has broken at
     least once, or None."""
-    intact = iface["intact"]
+    intact = run.interface["intact"]
     e = edge_sites(intact.shape[1])
     inner = intact[:, e:intact.shape[1] - e]
     if inner.shape[1] == 0 or inner.shape[0] == 0:
@@ -164,14 +165,16 @@ def slip_onset(iface: dict) -> int | None:
     return int(k[0]) if len(k) else None
 
 
-def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
+def static_peak(run) -> StaticPeak:
     """mu_s, its time and its place relative to the first break (see the module's definitions).
 
-    ``fn`` (F_N, m c^2/a) only scales mu_s into the static friction force F_s; without it F_s is NaN.
+    The run's F_N (``load.FN``, m c^2/a) only scales mu_s into the static friction force F_s; without it
+    F_s is NaN.
     """
+    iface, fn = run.interface, _fn(run)
     t = np.asarray(iface["t"], float)
-    m = mu(iface)
-    ks = slip_onset(iface)
+    m = mu(run)
+    ks = slip_onset(run)
     end = len(t) if ks is None else ks + 1
     window = "record" if ks is None else "slip onset"
     seg = m[:end]
@@ -198,23 +201,34 @@ def static_peak(iface: dict, fn: float | None = None) -> StaticPeak:
                       float(force))
 
 
-def fate(front: Front, iface: dict, max_gap: float = MAX_GAP) -> str:
-    """What became of a front: "crossed", "edge", "merged", "arrested" or "running" (module docstring)."""
+def _fn(run) -> float | None:
+    """The run's normal load F_N (m c^2/a), None when its scene does not say."""
+    fn = run.scene.get("load.FN")
+    return float(fn) if fn is not None else None
+
+
+@front_field("fate", "-", "the first that holds: crossed (its own tip broke bonds from one edge of the contact "
+             "to the other), edge (the same from inside the contact), relayed (its tip stopped short of the far "
+             "edge, but the rest of the way broke within max_gap of its last advance: another front finished it), "
+             "merged (the bond ahead of its tip was broken by another front when it stopped, or within max_gap), "
+             "arrested (a precursor: its tip "
+             "stopped inside the contact with the bond ahead holding, quiet for longer than max_gap before the "
+             "record ends) or running (the same within max_gap of the record's end: it may still move)",
+             "fate", ">8")
+def fate(run, front: Front) -> str:
+    """What became of a front: "crossed", "edge", "relayed", "merged", "arrested" or "running" (module
+    docstring), judged with the detector's patience the front was found with (``front.max_gap``)."""
+    iface, max_gap = run.interface, front.max_gap
     x, t = iface["x"], iface["t"]
     ns = len(x)
-    dx = 1.0 / ns
     e = edge_sites(ns)
-    tol = (e + 0.5) * dx
-    xs = front.tip["x"]
-    lo, hi = float(xs.min()), float(xs.max())
-    at_rear, at_front = lo <= x[0] + tol, hi >= x[-1] - tol
+    at_rear, at_front = _at_edges(run, front)
     if at_rear and at_front:            # a chain grows from its nucleation run to its tip: edge to edge
         return "crossed"
     d = front.direction
     if (d > 0 and at_front) or (d < 0 and at_rear):
         return "edge"
     if d != 0:
-        near = at_rear if d > 0 else at_front
         tip = int(np.argmin(np.abs(x - front.x_far)))
         k0 = int(np.searchsorted(t, front.t_end - max_gap))
         k_end = int(np.searchsorted(t, front.t_end))
@@ -222,27 +236,29 @@ def fate(front: Front, iface: dict, max_gap: float = MAX_GAP) -> str:
         broken = iface["intact"][k0:k1] == 0
         ahead = np.arange(tip + d, ns - e if d > 0 else e - 1, d)
         if len(ahead) and broken[:, ahead].any(axis=0).all():
-            return "crossed" if near else "edge"
+            return "relayed"
         if 0 <= tip + d < ns and broken[k_end - k0:, tip + d].any():
             return "merged"
     return "running" if float(t[-1]) - front.t_end <= max_gap else "arrested"
 
 
-def precursors(iface: dict, fr: list[Front] | None = None, max_gap: float = MAX_GAP) -> list[Precursor]:
-    """Every front that arrested inside the contact, with its arrest time, site and length."""
-    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
-    ns = len(iface["x"])
-    out = []
-    for i, f in enumerate(fr):
-        if fate(f, iface, max_gap) != "arrested":
-            continue
-        out.append(Precursor(i, f.nucleation_time, f.nucleation_x, f.t_end, f.x_far,
-                             abs(f.x_far - f.nucleation_x) + 1.0 / ns, f.kind, f))
-    return out
+@front_field("arrest_length", "l", "for an arrested front (a precursor), the length of contact it broke: "
+             "|x_arrest - x_nucleation| + 1/sites; null otherwise", "arrest", "6.3f")
+def arrest_length(run, front: Front) -> float | None:
+    """|x_far - x_nucleation| + 1/sites (l) for a front whose fate is "arrested", else None."""
+    if front.fate != "arrested":
+        return None
+    return abs(front.x_far - front.nucleation_x) + 1.0 / len(run.x)
 
 
-def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
-                max_gap: float = MAX_GAP) -> dict:
+def precursors(run, **kw) -> list[Precursor]:
+    """Every front of ``run.fronts(**kw)`` that arrested inside the contact, with its arrest time, site and
+    length."""
+    return [Precursor(i, f.nucleation_time, f.nucleation_x, f.t_end, f.x_far, f.arrest_length, f.kind, f)
+            for i, f in enumerate(run.fronts(**kw)) if f.fate == "arrested"]
+
+
+def observables(run, **kw) -> dict:
     """One flat row of friction and front observables (the columns of a sweep's summary table).
 
     Keys and units: first_break_time (l/c_r), first_break_x (l), mu_first_break, mu_s, mu_s_time (l/c_r),
@@ -252,14 +268,14 @@ def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = N
     of the first crossing front, c_r), front_speed_mean (mean |mean speed| of all fronts, c_r),
     slip_per_event (l).  Missing values are NaN (numbers) or "" (words).
     """
-    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
-    pk = static_peak(iface, fn)
-    fates = [fate(f, iface, max_gap) for f in fr]
-    pre = precursors(iface, fr, max_gap)
-    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+    fr = run.fronts(**kw)
+    pk = static_peak(run)
+    fates = [f.fate for f in fr]
+    pre = precursors(run, **kw)
+    crossed = [f for f in fr if crossed_contact(run, f)]
     nan = math.nan
-    m = mu(iface)
-    ks = slip_onset(iface)
+    m = mu(run)
+    ks = slip_onset(run)
     sliding = m[ks:] if ks is not None else m[:0]
     speeds = [abs(f.mean_speed) for f in fr if math.isfinite(f.mean_speed)]
     slips = [f.slip_u for f in fr if math.isfinite(f.slip_u)]
@@ -279,16 +295,30 @@ def observables(iface: dict, fn: float | None = None, fr: list[Front] | None = N
         "n_running": fates.count("running"), "n_merged": fates.count("merged"),
         "precursor_arrest_mean": float(np.mean(arrests)) if arrests else nan,
         "precursor_arrest_max": float(np.max(arrests)) if arrests else nan,
-        "rupture_kind": rupture_kind(fr, fates, pk.slip_onset),
+        "rupture_kind": rupture_kind(fr, crossed, pk.slip_onset),
         "front_speed": abs(crossed[0].mean_speed) if crossed else nan,
         "front_speed_mean": float(np.mean(speeds)) if speeds else nan,
         "slip_per_event": float(np.mean(slips)) if slips else nan,
     }
 
 
-def rupture_kind(fr: list[Front], fates: list[str], t_slip: float | None) -> str:
-    """"pulse", "crack", "mixed" or "none" (the module's definition)."""
-    crossed = [f for f, w in zip(fr, fates) if w == "crossed"]
+def _at_edges(run, front: Front) -> tuple[bool, bool]:
+    """Whether the front's path reached the rear (x/l = 0) and the front (x/l = 1) edge of the contact, within
+    ``edge_sites`` sites."""
+    x = run.x
+    tol = (edge_sites(len(x)) + 0.5) / len(x)
+    return float(front.tip["x"].min()) <= x[0] + tol, float(front.tip["x"].max()) >= x[-1] - tol
+
+
+def crossed_contact(run, front: Front) -> bool:
+    """Whether the front's crossing of the contact completed: it crossed edge to edge by its own tip, or it
+    nucleated at an edge and was relayed to the other."""
+    return front.fate == "crossed" or (front.fate == "relayed" and any(_at_edges(run, front)))
+
+
+def rupture_kind(fr: list[Front], crossed: list[Front], t_slip: float | None) -> str:
+    """"pulse", "crack", "mixed" or "none" (the module's definition); ``crossed`` the fronts that crossed the
+    contact (``crossed_contact``), in catalogue order."""
     if crossed:
         return crossed[0].kind
     if t_slip is None:
@@ -307,10 +337,9 @@ UNITS = {"first_break_time": "l/c_r", "first_break_x": "l", "mu_first_break": "-
          "slip_per_event": "l"}
 
 
-def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None = None,
-                  max_gap: float = MAX_GAP) -> list[str]:
+def summary_lines(run, **kw) -> list[str]:
     """The friction part of a run's report: static peak, slip onset, precursors."""
-    pk = static_peak(iface, fn)
+    pk = static_peak(run)
     if not math.isfinite(pk.mu_s):
         return ["friction: no mu(t) in this record"]
     where = ("" if pk.place == "no break" else
@@ -320,7 +349,7 @@ def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None =
     lines = [f"static peak mu_s = {pk.mu_s:.4g}{bound} at t = {pk.time:.3f} l/c_r{where}"]
     lines.append(f"slip onset (every bond broken once) at t = {pk.slip_onset:.3f} l/c_r"
                  if pk.slip_onset is not None else "slip onset: not within the record")
-    pre = precursors(iface, fr, max_gap)
+    pre = precursors(run, **kw)
     if pre:
         lines.append(f"{len(pre)} precursors (fronts that arrested), arrest lengths "
                      + ", ".join(f"{p.arrest_length:.3f}" for p in pre[:12]) + " l")
@@ -329,22 +358,22 @@ def summary_lines(iface: dict, fn: float | None = None, fr: list[Front] | None =
     return lines
 
 
-def summary(iface: dict, fn: float | None = None) -> str:
+def summary(run) -> str:
     """First break, the front catalogue with each front's fate, and the friction record (static peak,
-    slip onset, precursors), as ``parslip run`` prints it; ``fn`` is F_N."""
+    slip onset, precursors), as ``parslip run`` prints it."""
+    iface = run.interface
     tb, xb = first_break(iface)
     lines = []
     if tb is None:
         lines.append("no bond broke")
     else:
         lines.append(f"first break at t = {tb:.3f} l/c_r, x/l = {', '.join(f'{v:.3f}' for v in xb[:6])}")
-    fr = front_catalogue(iface)
+    fr = run.fronts()
     lines.append(f"{len(fr)} rupture fronts")
     if fr:
-        arrest = {p.index: p.arrest_length for p in precursors(iface, fr)}
-        lines.append(table(fr[:12], [fate(f, iface) for f in fr[:12]], arrest))
+        lines.append(table(fr[:12]))
     if "mu" in iface and len(iface["x"]):
-        lines += summary_lines(iface, fn, fr)
+        lines += summary_lines(run)
     return "\n".join(lines)
 
 
@@ -354,15 +383,15 @@ def summary(iface: dict, fn: float | None = None) -> str:
 MIN_DROP = 0.2
 
 
-def slip_events(iface: dict, fr: list[Front] | None = None, min_drop: float = MIN_DROP,
-                max_gap: float = MAX_GAP) -> list[SlipEvent]:
+def slip_events(run, min_drop: float = MIN_DROP, **kw) -> list[SlipEvent]:
     """The slip events of a stick-slip record: each drop of mu(t) from a peak to the following trough by
     at least ``min_drop`` times the record's largest mu, found as a drawdown (a stick phase ends where mu
     has fallen that far below its running peak; the slip ends at the lowest mu before mu has risen that
     far again).  With each event: mu before and after, the loader's displacement at its start, the fronts
     nucleated since the previous event ended, and the precursors (fronts arrested inside the contact) since the previous event
     with their arrest lengths and mu at arrest.  An event still falling at the record's end is included."""
-    m, t = mu(iface), np.asarray(iface["t"], float)
+    iface = run.interface
+    m, t = mu(run), np.asarray(iface["t"], float)
     ok = np.isfinite(m)
     if not ok.any():
         return []
@@ -383,8 +412,8 @@ def slip_events(iface: dict, fr: list[Front] | None = None, min_drop: float = MI
             slipping, k_peak = False, k
     if slipping:
         spans.append((k_peak, k_low))
-    fr = front_catalogue(iface, max_gap=max_gap) if fr is None else fr
-    pre = precursors(iface, fr, max_gap)
+    fr = run.fronts(**kw)
+    pre = precursors(run, **kw)
     loader = np.asarray(iface.get("loader", np.zeros(len(t))), float)
     out, t_prev = [], -math.inf
     for i, (a, b) in enumerate(spans):

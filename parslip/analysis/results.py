@@ -25,7 +25,6 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..io import contract
-from .fronts import MAX_GAP
 
 
 class Run:
@@ -43,8 +42,10 @@ class Run:
 
     @classmethod
     def from_arrays(cls, interface: dict, scene: dict | None = None, attrs: dict | None = None) -> "Run":
-        """A result object over arrays already in memory (same keys and units as ``interface``), without
-        snapshots: for records built by hand or cut from another run."""
+        """A result object over arrays already in memory (same keys and units as ``interface``, ``events``
+        included or not), without snapshots: for records drawn by hand in tests or cut from another run.
+        ``scene`` holds dotted keys (``{"load.FN": 1.0}``), ``attrs`` the root attributes (``c_s``, ``c_l``,
+        ``c_r`` give the block's wave speeds to a record without events)."""
         self = cls.__new__(cls)
         self.path, self._reader = "<memory>", None
         iface = dict(interface)
@@ -171,12 +172,14 @@ class Run:
 
     # --- fronts -------------------------------------------------------------
     def fronts(self, **kw):
-        """The rupture-front catalogue (``analysis.fronts.fronts``), cached per keyword set."""
+        """The rupture-front catalogue (``analysis.fronts.fronts``: options ``max_gap``, ``min_sites``,
+        ``window``), cached per keyword set.  Each front carries every registered per-front field
+        (``analysis.fronts.FIELDS``) as an attribute: ``run.fronts()[0].fate``."""
         from .fronts import fronts
         key = tuple(sorted(kw.items()))
         cache = self.__dict__.setdefault("_fronts", {})
         if key not in cache:
-            cache[key] = fronts(self.interface, **kw)
+            cache[key] = fronts(self, **kw)
         return cache[key]
 
 
@@ -213,7 +216,7 @@ class Run:
         """``analysis.friction.StaticPeak``: mu_s, its time, its window and its place relative to the first break."""
         from .friction import static_peak
         self.mu                                     # a file without forces: one ConfigError line
-        return static_peak(self.interface, self._fn())
+        return static_peak(self)
 
     @property
     def mu_s(self) -> float:
@@ -226,32 +229,25 @@ class Run:
         return self.static_peak.slip_onset
 
     def fates(self, **kw) -> list[str]:
-        """What became of each front of ``fronts(**kw)``: "crossed", "edge", "arrested" or "running"."""
-        from .friction import fate
-        gap = kw.get("max_gap", MAX_GAP)
-        return [fate(f, self.interface, gap) for f in self.fronts(**kw)]
+        """What became of each front of ``fronts(**kw)`` (``analysis.friction.fate``)."""
+        return [f.fate for f in self.fronts(**kw)]
 
     def precursors(self, **kw) -> list:
         """The fronts that arrested inside the contact (``analysis.friction.Precursor``: arrest time, site, length)."""
         from .friction import precursors
-        return precursors(self.interface, self.fronts(**kw), kw.get("max_gap", MAX_GAP))
+        return precursors(self, **kw)
 
     def slip_events(self, min_drop: float | None = None, **kw) -> list:
         """The stick-slip record's slip events (``analysis.friction.SlipEvent``): each drop of mu(t) by at least
         ``min_drop`` (default ``friction.MIN_DROP``) of its largest value, with mu before and after, the loader's
         displacement, and the precursors since the previous event."""
         from .friction import MIN_DROP, slip_events
-        return slip_events(self.interface, self.fronts(**kw), MIN_DROP if min_drop is None else min_drop,
-                           kw.get("max_gap", MAX_GAP))
+        return slip_events(self, MIN_DROP if min_drop is None else min_drop, **kw)
 
     def observables(self, **kw) -> dict:
         """The run's friction and front observables as one flat row (``analysis.friction.observables``)."""
         from .friction import observables
-        return observables(self.interface, self._fn(), self.fronts(**kw), kw.get("max_gap", MAX_GAP))
-
-    def _fn(self) -> float | None:
-        fn = self.scene.get("load.FN")
-        return float(fn) if fn is not None else None
+        return observables(self, **kw)
 
 
 def _nearest(values: np.ndarray, t: float, what: str) -> int:

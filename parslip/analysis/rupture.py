@@ -1,13 +1,16 @@
-"""Measures of a rupture front that the interface studies ask for, from the front catalogue and the
-interface record (``analysis.fronts``, ``io.contract``); no file access of its own.
+"""Measures of rupture as a crack: what a front released and how it ran, from the run (``analysis.results
+.Run``: its catalogue and interface record); no file access, no drawing.  The catalogue options
+(``max_gap``, ``min_sites``, ``window``) pass through to ``run.fronts``.
 
-andrews_s(iface, front)         Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) as the
-                                run has it along the front's path (the 2D supershear threshold is S ~ 1.77)
-daughters(fronts)               fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
-speed_summary(fronts)           the largest local speed fitted over the catalogue's window, and how many
+andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res) per site
+                                along the front's path, and its median (the 2D supershear threshold is
+                                S ~ 1.77); the per-front field ``andrews_s`` is that median
+daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
+speed_summary(run)              the largest local speed fitted over the catalogue's window, and how many
                                 sites ran above c_s or broke in bursts
 through_patch(front, lo, hi)    how a front met a patch [lo, hi) of the contact: its mean speed before,
                                 inside and after it, and whether it got through
+traction_drop (per-front field) the mean drop of the shear traction at the sites the front broke
 
 Units: x in l, t in l/c_r, speeds in c_r, tractions in rho c_r^2 (``/interface/sxy``).
 """
@@ -17,7 +20,8 @@ import math
 
 import numpy as np
 
-from .fronts import Front
+from ..io.contract import EVENT_BREAK
+from .fronts import Front, front_field
 
 # S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
 # 1.77 (tau_0 - tau_res).
@@ -29,38 +33,84 @@ def _sites(iface: dict, front: Front) -> np.ndarray:
     return np.clip(np.rint(np.asarray(front.tip["x"]) * len(iface["x"]) - 0.5).astype(int), 0, len(iface["x"]) - 1)
 
 
-def andrews_s(iface: dict, front: Front) -> dict:
-    """S = (tau_peak - tau_0) / (tau_0 - tau_res) along the front's path, from the interface shear traction
-    sxy of the frames: tau_0, the mean over the path of the traction in the last frame before the front
-    nucleated; tau_peak, the mean over the path of each site's largest traction up to the frame that first
-    shows its break; tau_res, the mean traction over the path in the frame where the front ends.  The
-    tractions are taken with the sign of tau_peak, so S does not depend on the drive's direction.  Returns
-    {"S", "tau_0", "tau_peak", "tau_res"}; S is NaN when tau_0 - tau_res is not positive (nothing was
-    released)."""
-    nan = {"S": math.nan, "tau_0": math.nan, "tau_peak": math.nan, "tau_res": math.nan}
+# l/c_r: the window behind the tip over which a site's residual traction is averaged (a broken bond carries
+# none): about the time a paper pulse takes to pass a site, so tau_res is the traction the front leaves.
+RES_WINDOW = 1.0
+
+
+def _break_tractions(run, front: Front) -> np.ndarray | None:
+    """The shear traction (rho c_r^2) of each of the front's sites at the step it broke, from the event
+    record's ``traction`` (``/interface/events/traction``); None when the record has no such field."""
+    ev = run.events
+    if ev is None or "traction" not in ev or "step" not in front.tip:
+        return None
+    hit = np.flatnonzero(ev["kind"] == EVENT_BREAK)
+    at = {(int(k), int(st)): float(tr) for k, st, tr in zip(ev["step"][hit], ev["site"][hit], ev["traction"][hit])}
+    sites = _sites(run.interface, front)
+    return np.array([at.get((int(k), int(st)), math.nan) for k, st in zip(front.tip["step"], sites)])
+
+
+def andrews_s(run, front: Front, window: float = RES_WINDOW) -> dict:
+    """Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res), per site along the front's path,
+    then summarised; tractions are the interface shear traction sxy (rho c_r^2).  Per site s the tip reached:
+
+      tau_0     the traction the front runs into: s's traction in the last frame before the front's first
+                break shows (the frame before its nucleation)
+      tau_peak  s's traction at the step its bond broke, from the event record (``traction``); a file
+                without it falls back on the frames, the largest traction s showed from tau_0's frame to
+                the last frame before its break (which may miss the peak: ``peak_from`` says "frames")
+      tau_res   the mean traction at s over ``window`` l/c_r from the first frame that shows its break, a
+                broken bond counting 0 (it carries no force until it re-forms)
+
+    Tractions are taken with the sign of the path's median tau_peak, so S does not depend on the drive's
+    direction.  Returns {"S": the median over the sites where tau_0 - tau_res > 0 (something was released),
+    "tau_0", "tau_peak", "tau_res": their medians, "peak_from": "events" or "frames", "window", "sites":
+    {"S", "tau_0", "tau_peak", "tau_res"} per site in the tip's order}; NaN where nothing was released or
+    the record holds no sxy."""
+    iface = run.interface
+    nan = {"S": math.nan, "tau_0": math.nan, "tau_peak": math.nan, "tau_res": math.nan, "peak_from": None,
+           "window": window, "sites": {}}
     if "sxy" not in iface or len(front.tip["t"]) == 0:
         return nan
-    sxy, t = np.asarray(iface["sxy"], float), np.asarray(iface["t"], float)
-    sites = _sites(iface, front)
-    frames = np.asarray(front.tip.get("frame", np.searchsorted(t, front.tip["t"])), int)
-    frames = np.clip(frames, 0, len(t) - 1)
-    k0 = max(int(frames[0]) - 1, 0)                  # the last frame before the first break shows
-    k_end = min(int(frames.max()), len(t) - 1)
-    peak = np.array([sxy[k0:max(k, k0) + 1, s].max() if np.mean(sxy[k0:k + 1, s]) >= 0 else
-                     sxy[k0:max(k, k0) + 1, s].min() for s, k in zip(sites, frames)])
-    sign = 1.0 if np.mean(peak) >= 0 else -1.0
-    tau_0 = sign * float(np.mean(sxy[k0, sites]))
-    tau_peak = sign * float(np.mean(peak))
-    tau_res = sign * float(np.mean(sxy[k_end, sites]))
+    sxy = np.asarray(iface["sxy"], float) * (np.asarray(iface["intact"]) != 0)    # a broken bond carries 0
+    t, sites = np.asarray(iface["t"], float), _sites(iface, front)
+    frames = np.clip(np.asarray(front.tip["frame"], int), 0, len(t) - 1)
+    k0 = max(int(frames[0]) - 1, 0)
+    peak = _break_tractions(run, front)
+    peak_from = "events" if peak is not None else "frames"
+    if peak is None:                      # the frames' extreme before the break, in the direction of the load
+        sign0 = 1.0 if np.median(sxy[k0, sites]) >= 0 else -1.0
+        peak = np.array([sign0 * (sign0 * sxy[k0:max(k, k0 + 1), s]).max() for s, k in zip(sites, frames)])
+    sign = 1.0 if np.median(peak) >= 0 else -1.0
+    n_w = max(1, int(round(window / float(np.median(np.diff(t))))) if len(t) > 1 else 1)
+    tau_0 = sign * sxy[k0, sites]
+    tau_peak = sign * peak
+    tau_res = sign * np.array([sxy[k:k + n_w, s].mean() for s, k in zip(sites, frames)])
     released = tau_0 - tau_res
-    return {"S": (tau_peak - tau_0) / released if released > 0 else math.nan,
-            "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}
+    S = np.where(released > 0, (tau_peak - tau_0) / np.where(released > 0, released, 1.0), math.nan)
+    ok = np.isfinite(S)
+
+    def med(a):
+        return float(np.median(a[ok])) if ok.any() else math.nan
+    return {"S": med(S), "tau_0": med(tau_0), "tau_peak": med(tau_peak), "tau_res": med(tau_res),
+            "peak_from": peak_from, "window": window,
+            "sites": {"S": S, "tau_0": tau_0, "tau_peak": tau_peak, "tau_res": tau_res}}
 
 
-def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
+@front_field("andrews_s", "-", "Andrews' S = (tau_peak - tau_0) / (tau_0 - tau_res), the median over the "
+             "front's path of each site's S: tau_0 its traction before the front nucleated, tau_peak at the "
+             "step it broke (the event's traction; the frames' largest when the file has none), tau_res its "
+             "mean over 1 l/c_r behind the tip, 0 while the bond is broken (rupture.andrews_s)")
+def andrews_s_field(run, front: Front) -> float:
+    """The median S of ``andrews_s`` (its per-site values and the three tractions: call it directly)."""
+    return andrews_s(run, front)["S"]
+
+
+def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
     """Every front born ahead of another, running front's tip, in its direction of travel, by at least
     ``min_gap`` (l; 2 sites of a 100-site contact): {"mother", "daughter" (catalogue indices), "t" (its
     nucleation, l/c_r), "x" (l), "ahead" (l from the mother's tip then)}."""
+    fronts = run.fronts(**kw)
     out = []
     for i, m in enumerate(fronts):
         if m.direction == 0:
@@ -76,11 +126,12 @@ def daughters(fronts: list[Front], min_gap: float = 0.02) -> list[dict]:
     return out
 
 
-def speed_summary(fronts: list[Front]) -> dict:
-    """{"max_speed" (the largest |local speed| any front reached, over the catalogue's fit window, bursts
-    left out), "supershear_sites" (sites run above c_s, over all fronts), "supershear_fronts" (how many
-    fronts had such a stretch), "burst_sites" (sites broken in bursts faster than c_l: near-simultaneous
-    breaks, no speed)}."""
+def speed_summary(run, **kw) -> dict:
+    """{"max_speed" (the largest |max_speed| of the fronts, over the catalogue's fit window, bursts
+    included: ``Front.band`` says which band it is in), "supershear_sites" (sites run above c_s, over all
+    fronts), "supershear_fronts" (how many fronts had such a stretch), "burst_sites" (sites broken in
+    bursts faster than every wave speed: near-simultaneous breaks, no speed)}."""
+    fronts = run.fronts(**kw)
     speeds = [abs(f.max_speed) for f in fronts if math.isfinite(f.max_speed)]
     return {"max_speed": max(speeds) if speeds else math.nan,
             "supershear_sites": sum(s["n_sites"] for f in fronts for s in f.supershear),
@@ -114,3 +165,32 @@ def through_patch(front: Front, lo: float, hi: float, c_l: float = math.inf) -> 
            "through": bool(np.any(x >= hi) if d > 0 else np.any(x < lo))}
     out["bursts"] = len(bursts)
     return out
+
+
+@front_field("traction_drop", "rho c_r^2", "mean over the front's path of the drop of the interface shear "
+             "traction its tip brings: per site, sxy in the last frame before the break minus sxy in the first "
+             "frame that shows it (the break from the event record), signed so that a release of the load "
+             "the path carried is positive; null without sxy", "dtau", "9.3g")
+def traction_drop(run, front: Front) -> float | None:
+    """Mean shear-traction drop along the front's path, rho c_r^2 (``/interface/sxy``'s units).
+
+    Per site s the tip reached, with k_s the first interface frame that shows its bond broken
+    (``tip["frame"]``: the first frame after the break's step in the event record, or the frame of the break
+    in a file without events):  d_tau_s = sign * (sxy[k_s - 1, s] - sxy[k_s, s]), where sign is that of
+    the mean of sxy[k_s - 1, s] over the path, so a front that releases the traction the path carried
+    has d_tau > 0 whichever way the drive loads it.  The value is the mean of d_tau_s over the sites with
+    a frame before their break (a bond broken in frame 0 has none); None when the record holds no sxy or
+    no such site.  The frames bracket the break by at most one frame interval, so d_tau_s is the drop
+    over that interval."""
+    iface = run.interface
+    if "sxy" not in iface:
+        return None
+    sites = _sites(iface, front)
+    frames = np.asarray(front.tip["frame"], int)
+    ok = frames > 0
+    if not ok.any():
+        return None
+    sxy = np.asarray(iface["sxy"], float)
+    before, after = sxy[frames[ok] - 1, sites[ok]], sxy[frames[ok], sites[ok]]
+    sign = 1.0 if np.mean(before) >= 0 else -1.0
+    return float(sign * np.mean(before - after))

@@ -55,7 +55,8 @@ DESCRIPTIONS = {
     "rupture_kind": "kind of the first front that crossed the contact (pulse, crack); else of the fronts up to the "
                     "slip onset (mixed if they differ); none if the contact never slipped everywhere",
     "n_fronts": "rupture fronts detected", "n_pulse": "fronts that were pulses", "n_crack": "fronts that were cracks",
-    "n_crossed": "fronts that crossed the contact edge to edge", "n_precursors": "fronts that arrested inside it",
+    "n_crossed": "fronts that crossed the contact edge to edge (by their own tip, or relayed from an edge)",
+    "n_precursors": "fronts that arrested inside it",
     "n_running": "fronts still moving at the record's end",
     "n_merged": "fronts that ran into another front's broken zone",
     "precursor_arrest_mean": "mean arrest length of the precursors", "precursor_arrest_max": "largest one",

@@ -13,23 +13,24 @@ import os
 
 def register(sub) -> None:
     from ..analysis.friction import MIN_DROP
-    from ..analysis.fronts import MAX_GAP
+    from ..analysis.fronts import MAX_GAP, MIN_SITES, WINDOW, field_help
     """Add this module's subcommands to the ``parslip`` parser."""
     raw = argparse.RawDescriptionHelpFormatter
     f = sub.add_parser("fronts", help="rupture-front catalogue and friction record (mu_s, precursors) of a run "
                                       "(table, or JSON with --json)",
-                       formatter_class=raw, description=FRONTS_HELP)
+                       formatter_class=raw, description=FRONTS_HELP + field_help())
     f.add_argument("run", help="run file written by `parslip run` (.vtkhdf)")
     f.add_argument("--json", action="store_true",
                    help="print one JSON object: first break, static peak, precursors and the list of fronts")
-    f.add_argument("--min-sites", type=int, default=5, help="drop fronts that broke fewer bonds (default 5)")
+    f.add_argument("--min-sites", type=int, default=MIN_SITES,
+                   help=f"drop fronts that broke fewer bonds (default {MIN_SITES})")
     f.add_argument("--max-gap", type=float, default=MAX_GAP,
                    help=f"longest pause of a tip whose bond re-attached, in l/c_r (default {MAX_GAP:g})")
     f.add_argument("--min-drop", type=float, default=MIN_DROP,
                    help=f"a slip event is a drop of mu by at least this share of its largest value "
                         f"(default {MIN_DROP:g})")
-    f.add_argument("--window", type=int, default=2,
-                   help="local speed fitted over 2*WINDOW+1 sites (default 2)")
+    f.add_argument("--window", type=int, default=WINDOW,
+                   help=f"local speed fitted over 2*WINDOW+1 sites (default {WINDOW})")
     f.set_defaults(func=cmd_fronts)
 
     g = sub.add_parser("figures", help="the paper's figure set for one run, as PNG and PDF",
@@ -67,16 +68,9 @@ def register(sub) -> None:
     a.set_defaults(func=cmd_accuracy)
 
 
-FRONTS_HELP = """Detect every rupture front from /interface/intact and the interface displacements.
-Per front: nucleation time (l/c_r) and site (x/l), direction (+1 toward x/l = 1),
-kind (pulse: bonds re-attach behind the tip while it is inside the contact; else
-crack), mean and maximum speed (signed, c_r), where it accelerates (x/l), width
-(lattice spacings a), slip u and v it carries (l), the tip trajectory, and its
-fate: crossed (edge to edge, alone or finished by a front it met), edge (left
-through the far edge from inside), merged (ran into another front's broken zone),
-arrested (a precursor: its tip stopped inside the contact with the bond ahead
-holding; with its arrest length, l) or running (still moving when the record
-ended).
+FRONTS_HELP = """Detect every rupture front from the bond events (/interface/events; the frames
+of /interface/intact for a file written before events existed) and the interface
+displacements, and give each front's fields (listed below).
 Then the friction record: the first break, the slip onset (every bond broken
 once), the static peak mu_s = max -F_T/F_N up to the slip onset, its time and
 its place relative to the first break, and the precursors."""
@@ -140,17 +134,11 @@ def cmd_fronts(args) -> int:
     run = open_run(args.run)
     kw = dict(max_gap=args.max_gap, min_sites=args.min_sites, window=args.window)
     fr = run.fronts(**kw)
-    fates = run.fates(**kw)
     pre = run.precursors(**kw)
     has_mu = "mu" in run.interface
     slips = run.slip_events(args.min_drop, **kw) if has_mu else []
     if args.json:
-        arrest = {p.index: p.arrest_length for p in pre}
-        fronts = []
-        for i, (f, w) in enumerate(zip(fr, fates)):
-            d = f.to_dict()
-            d.update(fate=w, arrest_length=arrest.get(i))
-            fronts.append(d)
+        fronts = [f.to_dict() for f in fr]        # every registered per-front field (analysis.fronts.FIELDS)
         tb, xb = run.first_break
         print(json.dumps({"run": args.run, "first_break": {"time": tb, "x": [float(v) for v in xb]},
                           "static_peak": run.static_peak.to_dict() if has_mu else None,
@@ -162,11 +150,11 @@ def cmd_fronts(args) -> int:
     if run.status != "complete":      # a run still written, stopped or failed: only its frames on disk count
         print(f"  status {run.status!r}: the file holds the {len(run.times)} frames it had written to disk")
     if fr:
-        print(table(fr, fates, {p.index: p.arrest_length for p in pre}))
+        print(table(fr))
     if has_mu:
         from ..analysis.friction import summary_lines
         from ..analysis.friction import slip_event_lines
-        print("\n".join(summary_lines(run.interface, run.scene.get("load.FN"), fr, args.max_gap)))
+        print("\n".join(summary_lines(run, **kw)))
         print("\n".join(slip_event_lines(slips, args.min_drop)))
     return 0
 

@@ -111,7 +111,7 @@ def _exit_now(comm, code: int):
 def _report(result, args, log):
     """Rank 0, after a complete run: the front catalogue, and the space-time picture with its cost."""
     from .. import analysis, hooks
-    print(analysis.summary(result.interface, result.scene.get("load.FN")))
+    print(analysis.summary(result))
     if args.no_png:
         log.info(f"wrote {result.path}")
         return
