@@ -562,7 +562,7 @@ def centre_over_edges(run, field: str = "sxy") -> float:
 
 def tip_peak(run, front, t: float, field: str = "sxy", sites: int = 5) -> float:
     """Largest ``field`` over the ``sites`` sites ahead of ``front``'s tip at the frame nearest ``t``."""
-    from .figures import tip_profile
+    from ..plot.figures import tip_profile
     _, s = tip_profile(run, front, t, field, sites)
     return float(np.max(s)) if len(s) else math.nan
 
@@ -588,7 +588,7 @@ def mode2_r2(run, front_index: int, times, sites: int = 8) -> float:
     """Median R^2 of the Mode II fits (appendix B) of a front at ``times``: the straight line
     sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2 through the ``sites`` sites ahead of its tip.  A fit with
     K_II undefined (sigma^-2 not rising with xi) counts as R^2 = 0."""
-    from .figures import mode2_fit, tip_profile
+    from ..plot.figures import mode2_fit, tip_profile
     fr = run.fronts()
     if len(fr) <= front_index:
         return math.nan

@@ -5,7 +5,7 @@ scene keys over the schema's defaults, which are the paper's scene), making
 each run once in ``OUT/runs/<role>.vtkhdf`` (a run already there with the
 same resolved scene and status ``complete`` is reused), the claims table of
 ``analysis.claims`` written as ``OUT/claims.md`` and ``OUT/claims.json``, the
-figure set (``analysis.figures``) under ``OUT/figures/``, and the scan of the
+figure set (``plot.figures``) under ``OUT/figures/``, and the scan of the
 paper's open readings (``READINGS``): each reading and the promising
 combinations scored by the share of claims that agree (``scan_readings``).
 
@@ -216,7 +216,7 @@ def first_front_times(shear, maps) -> list[float]:
 def write_figures(runs: dict, fig_dir: str) -> list[str]:
     """Each run's figure set under ``fig_dir/<role>/`` (the l = 300/500 runs: space-time and speed only),
     the T0 stress maps from shear_maps, the v0 sweep and push against pull."""
-    from ..analysis import figures
+    from ..plot import figures
     paths = []
     for role, run in runs.items():
         if role == MAPS:
