@@ -70,7 +70,7 @@ def metrics(test, ref) -> dict:
     spacetime       fraction of the intact-bond map that disagrees (``spacetime_disagreement``)
     Missing quantities (no break, too few fronts) are NaN.
     """
-    from ..analysis.paper import interval
+    from .paper.measures import interval
     tb_t, xb_t = first_break(test.interface)
     tb_r, xb_r = first_break(ref.interface)
     out = {"first_break_t": math.nan, "first_break_x": math.nan}
