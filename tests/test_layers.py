@@ -6,8 +6,9 @@ with ``errors`` and ``hooks`` below them all and ``parslip/__init__.py`` (the fa
 imports only its own layer or lower ones (at module level or inside a function alike; and analysis, which
 reads run files, never the engine; plot, which reads measures and draws them, never the engine either), never a private
 name (``_x``) of another subpackage, and the imports have no cycle (those inside a function included).  There is one scene
-loader: only ``scene.load`` reads a scene file and applies overrides.  Each check is also run on a
-drawn package that breaks it, so it can fail.
+loader: only ``scene.load`` reads a scene file and applies overrides.  No function (method and nested
+function included) is longer than ``MAX_LINES`` lines, from its ``def`` to its last line.  Each check is
+also run on a drawn package that breaks it, so it can fail.
 """
 import ast
 from pathlib import Path
@@ -24,6 +25,8 @@ FORBIDDEN = {("analysis", "engine"), ("plot", "engine")}
 # The command line calls the public API of the facade (``parslip.run``, ``parslip.open``): it is the API's
 # twin on the command line, so it may import the package itself.
 FACADE_USERS = ("cli",)
+# A function longer than this is split into named pieces: it no longer fits on a screen with its docstring.
+MAX_LINES = 80
 
 
 def modules(root: Path) -> dict:
@@ -125,6 +128,33 @@ def violations(root: Path) -> list[str]:
                 bad.append(f"{m} reads a scene itself ({node.id}); accepted: scene.load.load(scene, sets)")
                 break
     return bad
+
+
+def long_functions(root: Path, max_lines: int = MAX_LINES) -> list[str]:
+    """Every function (method, nested function) of the package longer than ``max_lines``, as
+    'module:line name (n lines)'."""
+    found = []
+    for m, (path, tree) in modules(root).items():
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > max_lines:
+                    found.append(f"{m}:{node.lineno} {node.name} ({n} lines; accepted: <= {max_lines})")
+    return found
+
+
+def test_no_function_is_longer_than_80_lines():
+    assert long_functions(PACKAGE) == []
+
+
+def test_a_long_function_is_found(tmp_path):
+    root = tmp_path / "parslip"
+    (root / "io").mkdir(parents=True)
+    body = "".join(f"    x{i} = {i}\n" for i in range(MAX_LINES))
+    (root / "io" / "a.py").write_text(f"class A:\n    def short(self):\n        pass\n\n\ndef f():\n{body}")
+    (root / "io" / "b.py").write_text("def g():\n" + "".join(f"    y{i} = {i}\n" for i in range(MAX_LINES - 1)))
+    found = long_functions(root)
+    assert len(found) == 1 and found[0].startswith("parslip.io.a:6 f (81 lines"), found
 
 
 def test_the_package_keeps_its_layers():
