@@ -12,7 +12,6 @@ the same layout.  Either way the file is identical for any rank count.
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 import time
 
@@ -22,7 +21,7 @@ import h5py
 import numpy as np
 
 from .. import hooks
-from ..version import __version__
+from ..version import __version__, git_commit  # noqa: F401  (git_commit: the provenance's commit)
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
 from .contract import EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, TIMING_PREFIX
@@ -42,26 +41,6 @@ MAX_FRAME_CHUNK_BYTES = 4 << 20
 # checkpoint and at the end: a full disk shows within this long, and without a flush per block of frames.
 FLUSH_S = 10.0
 _UNCLOSABLE: list = []          # files whose close failed, and their objects (see ``Output.close``)
-
-
-def git_commit() -> str:
-    """The commit of the parslip checkout, with '-dirty' for local changes; 'unknown' outside git."""
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    try:
-        top = subprocess.run(["git", "rev-parse", "--show-toplevel"], cwd=here, capture_output=True, text=True,
-                             timeout=5).stdout.strip()
-        # Only parslip's own checkout counts, not a repository it happens to be installed inside.
-        if not top or not os.path.samefile(os.path.join(top, "parslip"), here):
-            return "unknown"
-        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
-                             timeout=5).stdout.strip()
-        if not rev:
-            return "unknown"
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
-                               capture_output=True, text=True, timeout=5).stdout.strip()
-        return rev + ("-dirty" if dirty else "")
-    except (OSError, subprocess.SubprocessError, ValueError):
-        return "unknown"
 
 
 def hdf5_mode(size: int, comm=None) -> str:

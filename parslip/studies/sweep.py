@@ -399,7 +399,7 @@ def run_point(sw: Sweep, p: Point, outdir: str, comm=None, stop_after: float | N
 def _finish_record(rec: dict, out: str) -> None:
     """Observables, resolved scene and commit from the point's output file (rank 0)."""
     from ..analysis.results import Run
-    from ..io.output import git_commit
+    from ..version import git_commit
     rec.setdefault("commit", git_commit())
     if not os.path.exists(out):
         return
