@@ -13,7 +13,7 @@ no file of ``docs/``:
 
 and the files the site needs that git does not hold:
 
-  model/scene.png             the model picture, drawn by ``parslip.analysis.scene_picture`` from the
+  model/scene.png             the model picture, drawn by ``parslip.plot.scene_picture`` from the
                               lattice of a small scene (``DOCS_SCENE``)
   examples/tour.ipynb         the tour notebook (``examples/tour.ipynb``), which mkdocs-jupyter executes
                               and renders with its outputs
@@ -348,7 +348,7 @@ NOTEBOOKS = {"examples/tour.ipynb": ROOT / "examples" / "tour.ipynb"}
 
 
 def model_picture() -> bytes:
-    from parslip.analysis.scene_picture import DOCS_SCENE, scene_png
+    from parslip.plot.scene_picture import DOCS_SCENE, scene_png
     return scene_png(DOCS_SCENE)
 
 

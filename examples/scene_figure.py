@@ -13,7 +13,7 @@ import os
 import sys
 
 import parslip
-from parslip.analysis import figures
+from parslip.plot import figures
 
 QUICK = {"lattice.top_rows": 4, "lattice.top_cols": 24, "lattice.bottom_rows": 4, "lattice.bottom_cols": 40,
          "drive.v0": 0.02, "drive.duration": 6.0, "output.snapshots": 0}

@@ -14,7 +14,7 @@ import sys
 import tempfile
 
 import parslip
-from parslip.analysis import figures
+from parslip.plot import figures
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))       # the repository, where run/ is
 SCENES = ("run/push_v0_1e-2.toml", "run/push.toml", "run/push_v0_1e-4.toml")

@@ -1,5 +1,6 @@
-"""parslip's version and the commit of its checkout: one definition each, below every layer (provenance in
-every output file and sweep record)."""
+"""parslip's version and the commit it runs at: one definition, below every layer (provenance in every
+output file, ``parslip --version``).  Standard library only, so ``parslip --version`` works where numpy,
+h5py or MPI are missing."""
 from __future__ import annotations
 
 import os
@@ -26,3 +27,15 @@ def git_commit() -> str:
         return rev + ("-dirty" if dirty else "")
     except (OSError, subprocess.SubprocessError, ValueError):
         return "unknown"
+
+
+def describe() -> str:
+    """``parslip --version``: the version and the commit of the checkout, "(modified)" when it has
+    uncommitted changes to tracked files; outside a git checkout of parslip (an installed package) it says
+    so instead of a commit."""
+    commit = git_commit()
+    if commit == "unknown":
+        return f"parslip {__version__}, an installed package at {os.path.dirname(os.path.abspath(__file__))} " \
+               "(not a git checkout: no commit to report)"
+    rev, dirty = commit.removesuffix("-dirty"), commit.endswith("-dirty")
+    return f"parslip {__version__}, commit {rev}" + (" (modified)" if dirty else "")

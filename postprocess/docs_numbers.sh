@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the tables and figures of numbers under docs/, one command per page, from the checkout
 # it sits in.  Run it from a clean checkout (git status shows nothing): every row and picture records
-# the commit it ran at (analysis.provenance), and tests/test_shipped_numbers.py checks that each was
+# the commit it ran at (plot.provenance), and tests/test_shipped_numbers.py checks that each was
 # computed under today's defaults.  Regenerate a page whenever a default it depends on changes.
 #
 #   bash postprocess/docs_numbers.sh accuracy   # docs/studies/accuracy_{push,shear}.csv and Pareto plots (~5 min)

@@ -16,9 +16,10 @@ import shutil
 
 import numpy as np
 
-from parslip.analysis import maps, table
-from parslip.analysis.figures import fig_friction, save
+from parslip.analysis import table
 from parslip.analysis.results import Run
+from parslip.plot import maps
+from parslip.plot.figures import fig_friction, save
 
 SWEEPS = ("loading", "rate", "stiffness_push", "stiffness_shear")
 MODES = ("push", "pull", "shear")

@@ -16,7 +16,7 @@ import os
 import numpy as np
 
 from parslip.analysis import rupture, table
-from parslip.analysis.figures import pyplot, save
+from parslip.plot.figures import pyplot, save
 from parslip.analysis.friction import slip_events
 from parslip.analysis.fronts import wave_speeds
 from parslip.analysis.results import Run

@@ -1,4 +1,4 @@
-"""Render one whole-lattice snapshot off screen: a thin script over parslip.analysis.render.
+"""Render one whole-lattice snapshot off screen: a thin script over parslip.plot.render.
 
     python postprocess/snapshot.py out/push.vtkhdf --step -1 --field sxy --png sxy.png
 
@@ -11,7 +11,7 @@ import os
 import sys
 
 import parslip
-from parslip.analysis.render import FIELD_NAMES, render_frame
+from parslip.plot.render import FIELD_NAMES, render_frame
 from parslip.errors import ConfigError
 
 p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -142,7 +142,7 @@ def test_analysis_loads_no_mpi(tmp_path, cli_run):
     p = _script(f"""
         import sys
         import parslip
-        from parslip.analysis import figures
+        from parslip.plot import figures
         run = parslip.open({str(ref)!r})
         run.fronts(); run.interface; run.timings
         figures.write_all(run, "figs", only=["spacetime"])

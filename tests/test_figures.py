@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import parslip
-from parslip.analysis import figures
+from parslip.plot import figures
 from parslip.cli import analysis_cmds, main
 
 
@@ -171,7 +171,7 @@ def test_stress_map_times_on_one_snapshot_are_drawn_once_and_said(tmp_path, monk
     a logged note that the snapshots are too sparse."""
     import logging
 
-    from parslip.analysis import render
+    from parslip.plot import render
     drawn, notes = [], []
     monkeypatch.setattr(render, "render_frame", lambda run, field, t, png: drawn.append((field, t, png)))
 
@@ -207,12 +207,12 @@ def test_push_against_pull_speeds_on_a_log_axis(small_run, tmp_path, monkeypatch
 
 
 def test_a_figure_carries_the_scene_and_commit_it_was_drawn_from(tmp_path):
-    """analysis.provenance: savefig's text chunks, a stamp on a finished PNG, read back the same."""
+    """plot.provenance: savefig's text chunks, a stamp on a finished PNG, read back the same."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from parslip.analysis import provenance
-    from parslip.analysis.figures import save
+    from parslip.plot import provenance
+    from parslip.plot.figures import save
     src = {"scene": {"drive.mode": "push", "load.FN": 1.0}, "commit": "abc123"}
     fig, ax = plt.subplots()
     ax.plot([0, 1])

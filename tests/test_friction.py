@@ -243,7 +243,7 @@ def test_friction_figure_is_written(small_run, tmp_path):
 
 
 def test_a_record_without_forces_gets_no_friction_figure(tmp_path):
-    from parslip.analysis import figures
+    from parslip.plot import figures
     run = Run.from_arrays(blank(20), {"drive.mode": "push", "drive.v0": 0.01})
     assert figures.fig_friction(run, str(tmp_path)) == [] and not list(tmp_path.iterdir())
 

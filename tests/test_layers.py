@@ -1,14 +1,15 @@
 """The package's layers, read from the source with ``ast`` (no import runs):
 
-    model < parallel < io < scene < engine < analysis < studies < cli
+    model < parallel < io < scene < engine < analysis < plot < studies < cli
 
 with ``errors`` and ``hooks`` below them all and ``parslip/__init__.py`` (the facade) above.  A module
 imports only its own layer or lower ones (at module level or inside a function alike, and through
 ``importlib.import_module`` with a name the source states; and analysis, which reads run files, never the
-engine), never a private
+engine; plot, which reads measures and draws them, never the engine either), never a private
 name (``_x``) of another subpackage, and the imports have no cycle (those inside a function included).  There is one scene
-loader: only ``scene.load`` reads a scene file and applies overrides.  Each check is also run on a
-drawn package that breaks it, so it can fail.
+loader: only ``scene.load`` reads a scene file and applies overrides.  No function (method and nested
+function included) is longer than ``MAX_LINES`` lines, from its ``def`` to its last line.  Each check is
+also run on a drawn package that breaks it, so it can fail.
 """
 import ast
 from pathlib import Path
@@ -16,14 +17,17 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "parslip"
-LAYERS = ("model", "parallel", "io", "scene", "engine", "analysis", "studies", "cli")
+LAYERS = ("model", "parallel", "io", "scene", "engine", "analysis", "plot", "studies", "cli")
 BASE = ("errors", "hooks", "version")         # top-level modules below every layer
 FACADE = ("__init__", "__main__")             # the package itself: above every layer
-# Downward imports that are still refused: analysis reads run files and never imports the engine.
-FORBIDDEN = {("analysis", "engine")}
+# Downward imports that are still refused: analysis reads run files and never imports the engine; plot draws
+# what analysis measures and never imports the engine either.  (analysis importing plot is an upward import.)
+FORBIDDEN = {("analysis", "engine"), ("plot", "engine")}
 # The command line calls the public API of the facade (``parslip.run``, ``parslip.open``): it is the API's
 # twin on the command line, so it may import the package itself.
 FACADE_USERS = ("cli",)
+# A function longer than this is split into named pieces: it no longer fits on a screen with its docstring.
+MAX_LINES = 80
 
 
 def modules(root: Path) -> dict:
@@ -122,6 +126,9 @@ def violations(root: Path) -> list[str]:
             continue
         for mod, name, level in imports(m, path, tree):
             t = target(mod, name, mods)
+            if t not in mods:
+                bad.append(f"{m} imports {t}: no such module of the package (a module moved?)")
+                continue
             other = rank(t)
             if other is None:
                 continue
@@ -161,6 +168,33 @@ def violations(root: Path) -> list[str]:
     return bad
 
 
+def long_functions(root: Path, max_lines: int = MAX_LINES) -> list[str]:
+    """Every function (method, nested function) of the package longer than ``max_lines``, as
+    'module:line name (n lines)'."""
+    found = []
+    for m, (path, tree) in modules(root).items():
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > max_lines:
+                    found.append(f"{m}:{node.lineno} {node.name} ({n} lines; accepted: <= {max_lines})")
+    return found
+
+
+def test_no_function_is_longer_than_80_lines():
+    assert long_functions(PACKAGE) == []
+
+
+def test_a_long_function_is_found(tmp_path):
+    root = tmp_path / "parslip"
+    (root / "io").mkdir(parents=True)
+    body = "".join(f"    x{i} = {i}\n" for i in range(MAX_LINES))
+    (root / "io" / "a.py").write_text(f"class A:\n    def short(self):\n        pass\n\n\ndef f():\n{body}")
+    (root / "io" / "b.py").write_text("def g():\n" + "".join(f"    y{i} = {i}\n" for i in range(MAX_LINES - 1)))
+    found = long_functions(root)
+    assert len(found) == 1 and found[0].startswith("parslip.io.a:6 f (81 lines"), found
+
+
 def test_the_package_keeps_its_layers():
     assert violations(PACKAGE) == []
 
@@ -175,6 +209,8 @@ def test_every_layer_exists_and_nothing_else_does():
 @pytest.mark.parametrize("files,expected", [
     ({"model/a.py": "from ..engine import b\n", "engine/b.py": ""}, "an upper layer"),
     ({"analysis/a.py": "def f():\n    from parslip.engine.b import run\n", "engine/b.py": ""}, "an upper layer"),
+    ({"analysis/a.py": "def f():\n    from ..plot import b\n", "plot/b.py": ""}, "an upper layer"),
+    ({"plot/a.py": "from ..engine import b\n", "engine/b.py": ""}, "plot must not import engine"),
     ({"cli/a.py": "from ..io.b import _private\n", "io/b.py": ""}, "private"),
     ({"io/a.py": "from . import b\n", "io/b.py": "from . import a\n"}, "import cycle"),
     ({"io/a.py": "from . import b\n", "io/b.py": "def f():\n    from . import a\n"}, "import cycle"),
@@ -184,6 +220,7 @@ def test_every_layer_exists_and_nothing_else_does():
                   "        importlib.import_module(m)\n", "cli/b.py": "def g():\n    from .a import MODS\n"},
      "import cycle"),
     ({"extra/a.py": ""}, "in no layer"),
+    ({"cli/a.py": "def f():\n    from ..io.gone import x\n", "io/b.py": ""}, "no such module"),
     ({"cli/a.py": "from ..scene.load import resolve\nresolve({})\n", "scene/load.py": ""}, "reads a scene itself"),
 ])
 def test_each_rule_can_fail(tmp_path, files, expected):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from helpers import DT, NS, blank, draw
-from parslip.analysis import claims as cl
-from parslip.analysis import paper as m
+from parslip.studies.paper import claims as cl
+from parslip.studies.paper import measures as m
 from parslip.analysis.results import Run
 
 DX = 1 / NS
@@ -39,7 +39,7 @@ def runs():
 # --- the table --------------------------------------------------------------------------
 
 def test_claims_table_shape():
-    from parslip.studies.paper import ORDER
+    from parslip.studies.paper.study import ORDER
     assert len(cl.CLAIMS) >= 35
     keys = [c.key for c in cl.CLAIMS]
     assert len(set(keys)) == len(keys)

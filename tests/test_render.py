@@ -17,7 +17,7 @@ pytest.importorskip("pyvista")
 from PIL import Image  # noqa: E402  (pillow comes with matplotlib)
 
 import parslip  # noqa: E402
-from parslip.analysis.render import WINDOW, render_frame  # noqa: E402
+from parslip.plot.render import WINDOW, render_frame  # noqa: E402
 from parslip.cli import main  # noqa: E402
 
 

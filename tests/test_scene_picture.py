@@ -39,7 +39,7 @@ def _has_colour(img, hex_colour, tol=0.08, at_least=30):
 def test_draw_writes_a_picture_of_the_scene(tmp_path):
     from matplotlib.image import imread
 
-    from parslip.analysis import scene_picture as sp
+    from parslip.plot import scene_picture as sp
 
     scene = tmp_path / "small.toml"
     scene.write_text(SMALL)
@@ -58,7 +58,7 @@ def test_draw_writes_a_picture_of_the_scene(tmp_path):
 
 
 def test_draw_picture_of_the_docs_scene_as_png_bytes():
-    from parslip.analysis import scene_picture as sp
+    from parslip.plot import scene_picture as sp
 
     data = sp.scene_png(sp.DOCS_SCENE)
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000

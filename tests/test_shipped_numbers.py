@@ -16,7 +16,7 @@ import pathlib
 
 import pytest
 
-from parslip.analysis.provenance import read_png
+from parslip.plot.provenance import read_png
 from parslip.scene.schema import SCHEMA
 
 DOCS = pathlib.Path(__file__).resolve().parent.parent / "docs"
@@ -64,7 +64,7 @@ def test_a_table_records_its_scene_and_commit_under_todays_readings(path):
 @pytest.mark.parametrize("path", FIGURES, ids=lambda p: str(p.relative_to(DOCS)))
 def test_a_figure_records_its_scene_and_commit_under_todays_readings(path):
     p = read_png(path)
-    assert p["commit"] and p["scenes"], f"{path}: no parslip:commit / parslip:scene (analysis.provenance)"
+    assert p["commit"] and p["scenes"], f"{path}: no parslip:commit / parslip:scene (plot.provenance)"
     assert "unknown" not in p["commit"], path
     bad = _departures(p["scenes"], _varied(p["scenes"]))
     assert not bad, f"{path}: drawn from runs under other readings: {bad}"

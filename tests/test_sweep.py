@@ -368,7 +368,7 @@ def test_map_draws_a_png_from_either_table(here, capsys):
 
 
 def test_map_axes_and_selection():
-    from parslip.analysis import maps
+    from parslip.plot import maps
     pos, ticks, labels, scale = maps._axis([0.25, 1.0, 4.0], "auto")
     assert scale == "log" and labels == ["0.25", "1", "4"]
     assert maps._axis([1.0, 2.0], "auto")[3] == "linear"

@@ -6,15 +6,10 @@
   rupture     measures of rupture as a crack: Andrews' S, daughters, patches, the shear-traction drop
   slip        slip at a site: slip velocity, the slip a front's passage carries
 
-Beside them: ``results`` (the run object), ``table`` (a sweep's summary table), ``provenance`` (what a
-written picture records).  Importing the package registers every per-front field (``fronts.FIELDS``).
-Never imports the engine."""
+Beside them: ``results`` (the run object), ``table`` (a sweep's summary table).  Importing the package
+registers every per-front field (``fronts.FIELDS``).  Never imports the engine; pictures are
+``parslip.plot``'s, the paper's claims ``parslip.studies.paper``'s."""
 from . import friction, rupture, slip  # noqa: F401  (their per-front fields register on import)
 from .fronts import Front, first_break, fronts  # noqa: F401
 from .friction import summary  # noqa: F401
 
-
-def spacetime_png(iface: dict, png: str, title: str = "") -> bool:
-    """The run's space-time picture with axes (``figures.spacetime_picture``); False for a free block."""
-    from .figures import spacetime_picture
-    return spacetime_picture(iface, png, title)

@@ -82,7 +82,7 @@ FIGURE_NAMES = ("spacetime", "front_speed", "interface_stress", "stress_maps", "
 FIGURES_HELP = """Write the figure set of the paper's Sec. 3 and appendices for one run:
 space-time diagram with the detected fronts (Figs. 2b/4b/6b), front speed v/c_r
 against x_tip/l (2c/4c/6c), interface sigma_xy and sigma_yy (rho c_r^2) about the
-leading tip (3b-c/5b-c/7b-c), stress maps (3a/5a/7a/8, when parslip.analysis.render
+leading tip (3b-c/5b-c/7b-c), stress maps (3a/5a/7a/8, when parslip.plot.render
 is present), u(t) at three points (10), Delta u and Delta v behind the tips (9),
 slip velocity (app. C), pulse width in a (app. A), Mode II fit K_II (rho c_r^2
 l^1/2) and x_p (l) (app. B, also as mode2_fit.csv); beyond the paper, friction:
@@ -160,7 +160,7 @@ def cmd_fronts(args) -> int:
 
 
 def cmd_figures(args) -> int:
-    from ..analysis import figures
+    from ..plot import figures
     from ..analysis.results import open as open_run
     from ..errors import ConfigError
 
@@ -177,7 +177,7 @@ def cmd_figures(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from ..analysis import figures
+    from ..plot import figures
     from ..analysis.results import open as open_run
     from ..errors import ConfigError
 

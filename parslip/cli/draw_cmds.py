@@ -29,7 +29,7 @@ def register(sub) -> None:
 
 
 def cmd_draw(args) -> int:
-    from ..analysis.scene_picture import write_scene_picture
+    from ..plot.scene_picture import write_scene_picture
     from ..errors import ConfigError
 
     if not os.path.isfile(args.scene):

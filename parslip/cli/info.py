@@ -40,10 +40,8 @@ def _block(label: str, items: list[str]) -> list[str]:
     return [_line(label if i == 0 else "", item) for i, item in enumerate(items)]
 
 
-def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[str]:
-    """The lines of `parslip info` for the derived scene ``st`` on ``ranks`` ranks."""
-    from ..scene.memory import BASE, available_bytes, predict
-    from ..io.output import hdf5_mode
+def _lattice_lines(st, scene_path: str) -> list[str]:
+    """The scene, the lattice (nodes integrated, fixed, driven; the substrate) and the top block."""
     s, lat, mat = st.scene, st.lattice, st.material
     top, bot = lat.top, lat.bottom
     n = lat.n_nodes
@@ -57,41 +55,57 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
         sub = f"substrate {bot.rows} x {bot.cols} (elastic; its row AB fixed)"
     else:
         sub = "no substrate (a free block)"
-    out = [_line("scene", scene_path),
-           _line("lattice", f"top block {top.rows} x {top.cols}, {sub}: {n} nodes ({n - fixed} integrated, "
-                            f"{fixed} fixed, {driven} driven), contact l = {st.l:g} a, "
-                            f"{lat.n_top_sites} interface sites"),
-           _line("top block", f"nu = {mat.nu} ({mat.model}): k_n = {mat.kn_top:.6g}, k_t = {mat.kt_top:.6g} "
-                              f"(m c^2/a^2)")]
-    if lat.has_interface:
-        from ..model.physics import born_wave_speeds
-        cl_b, cs_b = born_wave_speeds(mat.kn_bottom, mat.kt_bottom)
-        out.append(_line("substrate", f"k_n = {mat.kn_bottom:.6g}, k_t = {mat.kt_bottom:.6g}: c_l = {cl_b:.6g}, "
-                                      f"c_s = {cs_b:.6g}" + (" (rigid: only its interface sites, fixed)"
-                                                             if lat.rigid else "")))
-        law = st.law
-        out.append(_line("interface", f"k_x = {law.kx:g}, k_y = {law.ky:g}, delta0 = {law.delta0:g} a, delta_b = "
-                                      f"{law.delta_b:g} a; F_N = {s['load.FN']:g} (the gap closes at N k_y delta0 = "
-                                      f"{law.closing_load(top.cols):.6g}): mean gap at rest "
-                                      f"{law.delta0 - s['load.FN'] / (top.cols * law.ky):.4g} a"))
-        if not law.uniform:
-            vals = law.site_values(lat.n_top_sites)
-            out.append(_line("sites", "; ".join(
-                f"{k} {v.min():.4g} to {v.max():.4g} (mean {v.mean():.4g}, cv {v.std() / v.mean():.3g})"
-                if v.max() > v.min() else f"{k} {v[0]:.4g}" for k, v in vals.items()) + f" over {lat.n_top_sites} sites"
-                + (f"; {len(law.patches)} patch(es)" if law.patches else "")
-                + (f"; random {law.random[0]}: cv {law.random[1]:g}, correlation {law.random[2]:g} a, seed "
-                   f"{law.random[3]}" if law.random else "")))
-        if law.heal:
-            out.append(_line("healing", f"re-bond only below a relative slip velocity of {law.heal_speed:g} c_r"
-                             * bool(law.heal_speed) + ("; " if law.heal_speed and law.heal_time else "")
-                             + f"after claiming the same site for {law.heal_time:g} l/c_r" * bool(law.heal_time)))
-    if s["drive.mode"] != "none" and (s["drive.spring"] > 0 or s["drive.rows"]):
-        rows = s["drive.rows"]
-        out.append(_line("drive", (f"through a spring of k_s = {s['drive.spring']:g} m c^2/a^2 per driven node to a "
-                                   f"rigid loader at v0" if s["drive.spring"] > 0 else "prescribed x")
-                         + (f"; rows {rows[0]} to {rows[1]} of the face" if rows else "")))
-    out += [
+    return [_line("scene", scene_path),
+            _line("lattice", f"top block {top.rows} x {top.cols}, {sub}: {n} nodes ({n - fixed} integrated, "
+                             f"{fixed} fixed, {driven} driven), contact l = {st.l:g} a, "
+                             f"{lat.n_top_sites} interface sites"),
+            _line("top block", f"nu = {mat.nu} ({mat.model}): k_n = {mat.kn_top:.6g}, k_t = {mat.kt_top:.6g} "
+                               f"(m c^2/a^2)")]
+
+
+def _interface_lines(st) -> list[str]:
+    """The substrate's waves, the interface law, its sites when they differ, and healing."""
+    from ..model.physics import born_wave_speeds
+    s, lat, mat, law = st.scene, st.lattice, st.material, st.law
+    top = lat.top
+    cl_b, cs_b = born_wave_speeds(mat.kn_bottom, mat.kt_bottom)
+    out = [_line("substrate", f"k_n = {mat.kn_bottom:.6g}, k_t = {mat.kt_bottom:.6g}: c_l = {cl_b:.6g}, "
+                              f"c_s = {cs_b:.6g}" + (" (rigid: only its interface sites, fixed)"
+                                                     if lat.rigid else "")),
+           _line("interface", f"k_x = {law.kx:g}, k_y = {law.ky:g}, delta0 = {law.delta0:g} a, delta_b = "
+                              f"{law.delta_b:g} a; F_N = {s['load.FN']:g} (the gap closes at N k_y delta0 = "
+                              f"{law.closing_load(top.cols):.6g}): mean gap at rest "
+                              f"{law.delta0 - s['load.FN'] / (top.cols * law.ky):.4g} a")]
+    if not law.uniform:
+        vals = law.site_values(lat.n_top_sites)
+        out.append(_line("sites", "; ".join(
+            f"{k} {v.min():.4g} to {v.max():.4g} (mean {v.mean():.4g}, cv {v.std() / v.mean():.3g})"
+            if v.max() > v.min() else f"{k} {v[0]:.4g}" for k, v in vals.items()) + f" over {lat.n_top_sites} sites"
+            + (f"; {len(law.patches)} patch(es)" if law.patches else "")
+            + (f"; random {law.random[0]}: cv {law.random[1]:g}, correlation {law.random[2]:g} a, seed "
+               f"{law.random[3]}" if law.random else "")))
+    if law.heal:
+        out.append(_line("healing", f"re-bond only below a relative slip velocity of {law.heal_speed:g} c_r"
+                         * bool(law.heal_speed) + ("; " if law.heal_speed and law.heal_time else "")
+                         + f"after claiming the same site for {law.heal_time:g} l/c_r" * bool(law.heal_time)))
+    return out
+
+
+def _drive_lines(st) -> list[str]:
+    """The drive, when it is more than a prescribed x on the whole face."""
+    s = st.scene
+    if not (s["drive.mode"] != "none" and (s["drive.spring"] > 0 or s["drive.rows"])):
+        return []
+    rows = s["drive.rows"]
+    return [_line("drive", (f"through a spring of k_s = {s['drive.spring']:g} m c^2/a^2 per driven node to a "
+                            f"rigid loader at v0" if s["drive.spring"] > 0 else "prescribed x")
+                  + (f"; rows {rows[0]} to {rows[1]} of the face" if rows else ""))]
+
+
+def _time_lines(st) -> list[str]:
+    """Wave speeds, the stability limit, the time step and the steps of each phase."""
+    s, mat = st.scene, st.material
+    return [
         _line("wave speeds", f"c_s = {mat.c_s:.6g}, c_l = {mat.c_l:.6g}  (unit: {mat.velocity_unit})"),
         _line("Rayleigh speed", f"c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)"),
         _line("surface wave", f"{mat.c_surface_born:.6g} = {mat.c_surface_born / mat.c_s:.5f} c_s "
@@ -105,11 +119,18 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
                        f"  (l/c_r = {st.t_unit / st.dt:.1f} steps; ramp {s['load.ramp']:g}, settle "
                        f"{s['load.settle']:g}, drive {s['drive.duration']:g} l/c_r)"),
     ]
+
+
+def _cost_lines(st, ranks: int) -> list[str]:
+    """Node updates and wall time, memory per rank, output size and the usable rank counts."""
+    from ..io.output import hdf5_mode
+    from ..scene.memory import BASE, available_bytes, predict
+    n = st.lattice.n_nodes
     ups = budget.node_updates(st)
     rate = budget.THROUGHPUT[st.precision]
-    out.append(_line("cost", f"{ups:.4g} node-updates ({n} nodes x {st.n_steps} steps): about "
-                             f"{_duration(budget.wall_seconds(st, ranks))} of time loop on {ranks} rank(s) at "
-                             f"{rate / 1e6:.0f} M node-updates/s per rank ({st.precision}, measured by parslip bench)"))
+    out = [_line("cost", f"{ups:.4g} node-updates ({n} nodes x {st.n_steps} steps): about "
+                         f"{_duration(budget.wall_seconds(st, ranks))} of time loop on {ranks} rank(s) at "
+                         f"{rate / 1e6:.0f} M node-updates/s per rank ({st.precision}, measured by parslip bench)")]
     # The writer this Python's h5py would use at this rank count (io.output.hdf5_mode): the gathering
     # writer's rank 0 holds every node's snapshot fields, the collective one spreads them.
     writer = hdf5_mode(ranks)
@@ -129,16 +150,31 @@ def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[st
     out.append(_line("ranks", f"1 to {st.max_ranks()} (slabs of whole columns; interface halos of {r.top_site} and "
                               f"{r.bottom_site} columns serve a slip reach of {st.slip_reach:.3g} a, across as "
                               f"many slabs as needed)"))
-    out += _block("left out", [f"{item}: {text}" for item, text in budget.left_out(st, ranks)])
-    out += _block("warnings", advice.warnings(st))
+    return out
+
+
+def _preset_lines(st, scene_path: str, sets) -> list[str]:
+    """The command that runs the scene as each preset, when the scene differs from it."""
+    out = []
     for name, preset in (("quick look", presets.QUICK_LOOK), ("publication", presets.PUBLICATION)):
-        diff = presets.differences(s, preset)
+        diff = presets.differences(st.scene, preset)
         if diff:            # README "Error against run time": what each costs and how far it is off
             changed = {x.split("=", 1)[0] for x in diff}      # the preset's value replaces the user's
             keep = [x for x in sets if x.split("=", 1)[0].strip() not in changed]
             extra = "".join(f" --set {x}" for x in keep + diff)
             out.append(_line(name, f"parslip run {scene_path}{extra}"))
     return out
+
+
+def report(st, scene_path: str, ranks: int = 1, sets: list[str] = ()) -> list[str]:
+    """The lines of `parslip info` for the derived scene ``st`` on ``ranks`` ranks."""
+    out = _lattice_lines(st, scene_path)
+    if st.lattice.has_interface:
+        out += _interface_lines(st)
+    out += _drive_lines(st) + _time_lines(st) + _cost_lines(st, ranks)
+    out += _block("left out", [f"{item}: {text}" for item, text in budget.left_out(st, ranks)])
+    out += _block("warnings", advice.warnings(st))
+    return out + _preset_lines(st, scene_path, sets)
 
 
 def _how(method: str) -> str:

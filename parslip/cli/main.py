@@ -9,6 +9,7 @@ broadcasts the decision; every rank then takes the same branch.
     mpirun -n 2 parslip run run/push.toml
     parslip info run/push.toml --set drive.v0=1e-2
     parslip keys
+    parslip --version
 """
 from __future__ import annotations
 
@@ -27,10 +28,30 @@ COMMAND_MODULES = ("parslip.cli.scene_cmds", "parslip.cli.analysis_cmds", "parsl
                    "parslip.cli.paper_cmds", "parslip.cli.sweep_cmds", "parslip.cli.draw_cmds")
 
 
-def _parser() -> argparse.ArgumentParser:
+class _Version(argparse.Action):
+    """``--version``: the version and the commit (``version.describe``), asked of git only when given."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ..version import describe
+        print(describe())
+        parser.exit()
+
+
+def _top_parser() -> argparse.ArgumentParser:
+    """The command's own options, before any subcommand's parser is built."""
     p = argparse.ArgumentParser(prog="parslip", description="Onset of frictional slip at adhesive elastic "
                                 "interfaces on a distributed Born lattice.", epilog=UNITS_HELP,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action=_Version, help="print the version and the commit of this checkout (or "
+                   "that it is an installed package), then exit")
+    return p
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _top_parser()
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run", help="run a scene (under mpirun for several ranks)", epilog=UNITS_HELP,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -66,6 +87,10 @@ def _cmd_run(args) -> int:
 def main(argv=None) -> int:
     """Parse, start MPI only when a launcher started several processes, run the subcommand, and map
     every failure to one line and its exit code (the errors carry them: ``parslip.errors``)."""
+    if (sys.argv[1:] if argv is None else list(argv))[:1] == ["--version"]:
+        # Answered before the subcommands' parsers are built (some import the analysis, hence numpy), so an
+        # installed package tells its version even where its dependencies are missing.
+        _top_parser().parse_args(["--version"])
     args = _parser().parse_args(argv)
     comm = None
     if getattr(args, "mpi", False):

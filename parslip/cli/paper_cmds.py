@@ -1,8 +1,8 @@
 """``parslip paper``: the paper reproduced, claim by claim, and its open readings scored.
 
-Argument parsing only: the work is ``parslip.studies.paper``'s.  Bad input
-(an unknown role, a bad --set, an output directory that cannot be made)
-raises ``ConfigError``: one line naming what and what is accepted, exit 2.
+Argument parsing and dispatch only: the work is ``parslip.studies.paper``'s
+(``command.main`` checks the input, ``study`` makes the runs and writes the
+tables, ``claims`` and ``measures`` compare them with the paper).
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ push_l300, pull_l300, shear_l300, shear_l500 (Sec. 4.4).  About 5 minutes on
 one rank when nothing is there yet (the l = 500 run 3 of them).
 
 --readings instead scores the paper's open readings (each scene key of
-parslip.studies.paper.READINGS flipped alone, the promising combinations, and
+parslip.studies.paper.study.READINGS flipped alone, the promising combinations, and
 numerics that could cause a disagreement) by the claims the push, pull, shear
 and push_v0_1e-2 runs measure: OUT/readings.md and OUT/readings.json, the runs
 under OUT/readings/.  Under mpiexec -n N every run uses the N ranks (in-process,
@@ -43,41 +43,6 @@ def register(sub) -> None:
 
 
 def cmd_paper(args) -> int:
-    from ..engine.progress import setup_logging
-    from ..errors import ConfigError
-    from ..scene.load import load, overrides
-    from ..studies import paper
-
-    known = list(paper.ORDER)
-    for role in args.role or ():
-        if role not in known:
-            raise ConfigError(f"--role {role!r}: unknown; accepted: {', '.join(known)}")
-    sets = {}
-    for key, value in overrides(args.set):
-        if key == "load.FN" and value == "per_node":
-            sets[key] = value
-            continue
-        load({}, {key: value})                       # one line naming the key and what it accepts
-        sets[key] = value
-    try:
-        os.makedirs(args.out, exist_ok=True)
-    except OSError as e:
-        raise ConfigError(f"--out {args.out!r}: cannot create ({e.strerror}); accepted: a writable directory") \
-            from None
-    comm = args.comm
-    rank = comm.Get_rank() if comm is not None else 0
-    setup_logging(rank, comm.Get_size() if comm is not None else 1)
-    if args.readings:
-        paper.scan_readings(args.out, sets, args.shrink, comm, rerun=args.rerun)
-        if rank == 0:
-            print(open(os.path.join(args.out, "readings.md")).read())
-        return 0
-    res = paper.reproduce(args.out, args.role, sets, args.shrink, not args.no_figures, comm, args.rerun)
-    if rank == 0:
-        from ..analysis.claims import counts, share_agreeing
-        c = counts(res["rows"])
-        print(f"{c['agrees']} of {len(res['rows'])} claims agree ({share_agreeing(res['rows']):.0%}), "
-              f"{c['disagrees']} disagree, {c['not measured']} not measured; {res['seconds']:.0f} s")
-        print(os.path.join(args.out, "claims.md"))
-        print(os.path.join(args.out, "claims.json"))
-    return 0
+    from ..studies.paper.command import main
+    return main(args.out, roles=args.role, set_items=args.set, readings=args.readings, shrink=args.shrink,
+                figures=not args.no_figures, rerun=args.rerun, comm=args.comm)

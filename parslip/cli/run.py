@@ -13,7 +13,7 @@ run ended to an exit code and one line:
        came while a rank was blocked
 
 On a complete run rank 0 then prints the rupture-front catalogue and draws
-the space-time picture (``analysis.figures.spacetime_figure``) next to the
+the space-time picture (``plot.figures.spacetime_picture``) next to the
 output, before the command returns.
 """
 from __future__ import annotations
@@ -110,7 +110,7 @@ def _exit_now(comm, code: int):
 
 def _report(result, args, log):
     """Rank 0, after a complete run: the front catalogue, and the space-time picture with its cost."""
-    from .. import analysis, hooks
+    from .. import analysis, hooks, plot
     print(analysis.summary(result))
     if args.no_png:
         log.info(f"wrote {result.path}")
@@ -122,7 +122,7 @@ def _report(result, args, log):
     if hooks.get("hold_before_picture"):        # the test hook: wait here, as a slow picture would
         hooks.hold(f"{png}.held")
     try:
-        analysis.spacetime_png(result.interface, png, title)
+        plot.spacetime_png(result.interface, png, title)
     except OSError as e:
         log.warning(f"the space-time picture {png} was not written ({e})")
         return

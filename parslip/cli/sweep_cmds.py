@@ -1,4 +1,4 @@
-"""Subcommands over many runs: `parslip sweep` (``studies.sweep``) and `parslip map` (``analysis.maps``).
+"""Subcommands over many runs: `parslip sweep` (``studies.sweep``) and `parslip map` (``plot.maps``).
 
 Bad input (a sweep file, a table, a column) is a ``ConfigError``: one line
 naming the key, the value and what is accepted, exit 2; a missing optional
@@ -140,8 +140,9 @@ def _dry_run(args) -> int:
 
 
 def cmd_map(args) -> int:
-    from ..analysis import maps, table
+    from ..analysis import table
     from ..errors import ConfigError
+    from ..plot import maps
     from ..scene.load import overrides
 
     tab = table.read(args.table)

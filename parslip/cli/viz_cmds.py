@@ -47,7 +47,7 @@ def register(sub) -> None:
 def cmd_render(args) -> int:
     import parslip
 
-    from ..analysis.render import field_spec, render_frame, render_movie, snapshot_index
+    from ..plot.render import field_spec, render_frame, render_movie, snapshot_index
 
     run = parslip.open(args.run)
     field_spec(run, args.field)                 # bad field: one line before any work

@@ -70,7 +70,7 @@ def metrics(test, ref) -> dict:
     spacetime       fraction of the intact-bond map that disagrees (``spacetime_disagreement``)
     Missing quantities (no break, too few fronts) are NaN.
     """
-    from ..analysis.paper import interval
+    from .paper.measures import interval
     tb_t, xb_t = first_break(test.interface)
     tb_r, xb_r = first_break(ref.interface)
     out = {"first_break_t": math.nan, "first_break_x": math.nan}
@@ -397,7 +397,7 @@ def pareto_png(rows: list[dict], out_dir: str, title: str = "") -> list[str]:
 
     Each knob's reference is drawn hollow at the floor, unlabelled (its error is zero by definition); rows measured
     against a knob's limit instead of its reference are left out."""
-    from ..analysis.figures import legend, pyplot, save
+    from ..plot.figures import legend, pyplot, save
     plt = pyplot()
     fig, axes = plt.subplots(1, len(PARETO), figsize=(4.2 * len(PARETO), 3.6))
     knobs = list(dict.fromkeys(r["knob"] for r in rows))

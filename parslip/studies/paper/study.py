@@ -4,14 +4,14 @@ Responsible for ``parslip paper``: which scenes (``ROLES``, each a set of
 scene keys over the schema's defaults, which are the paper's scene), making
 each run once in ``OUT/runs/<role>.vtkhdf`` (a run already there with the
 same resolved scene and status ``complete`` is reused), the claims table of
-``analysis.claims`` written as ``OUT/claims.md`` and ``OUT/claims.json``, the
-figure set (``analysis.figures``) under ``OUT/figures/``, and the scan of the
+``studies.paper.claims`` written as ``OUT/claims.md`` and ``OUT/claims.json``, the
+figure set (``plot.figures``) under ``OUT/figures/``, and the scan of the
 paper's open readings (``READINGS``): each reading and the promising
 combinations scored by the share of claims that agree (``scan_readings``).
 
 Every run starts in ``run_scene``, the one place to change when runs move
-in-process (``parslip.run``).  Measuring is ``analysis``'s job; this module
-only decides what to run and writes the tables.
+in-process (``parslip.run``).  Measuring is ``measures``' and ``claims``' job; this
+module only decides what to run and writes the tables.
 """
 from __future__ import annotations
 
@@ -22,11 +22,12 @@ import os
 import time
 from dataclasses import dataclass
 
-from ..analysis import claims as cl
-from ..errors import ConfigError
-from ..io.scenefile import loads as load_scene_text
-from ..scene.load import load
-from ..scene.schema import SCHEMA, to_toml
+from ...errors import ConfigError
+from ...io.scenefile import loads as load_scene_text
+from ...parallel import collective
+from ...scene.load import load
+from ...scene.schema import SCHEMA, to_toml
+from . import claims as cl
 
 log = logging.getLogger("parslip")
 
@@ -111,8 +112,8 @@ def run_scene(scene: dict, out: str, comm=None) -> int:
     in this process (``engine.runner.run_scene``, what ``parslip.run`` calls); returns the exit code the
     command line would give (0, 2 bad input, 3 failed), the same on every rank.  The scene is also written
     beside the output as ``out`` with .toml, for whoever wants to run it again by hand."""
-    from ..engine.runner import run_scene as run
-    from ..errors import ConfigError, RunError
+    from ...engine.runner import run_scene as run
+    from ...errors import ConfigError, RunError
     if comm is None or comm.Get_rank() == 0:
         os.makedirs(os.path.dirname(out) or ".", exist_ok=True)
         with open(os.path.splitext(out)[0] + ".toml", "w") as fh:
@@ -133,7 +134,7 @@ def reusable(path: str, scene: dict) -> bool:
     if not os.path.exists(path):
         return False
     try:
-        from ..io.contract import read_attrs
+        from ...io.contract import read_attrs
         attrs = read_attrs(path)
         stored = load_scene_text(attrs.get("scene", ""))
         want = load(scene)
@@ -160,10 +161,9 @@ def ensure(role: str, scene: dict, run_dir: str, comm=None, rerun: bool = False)
         load(scene)
     except ConfigError as e:
         return Made(role, path, 0.0, False, 2, f"refused: {e}")
-    rank0 = comm is None or comm.Get_rank() == 0
-    keep = (not rerun and reusable(path, scene)) if rank0 else None
-    if comm is not None:
-        keep = comm.bcast(keep, root=0)
+    # Rank 0 reads the file and every rank takes its answer (parallel.collective: a ConfigError there
+    # reaches every rank instead of leaving them waiting in the broadcast).
+    keep = collective.decide(comm, lambda: not rerun and reusable(path, scene))
     if keep:
         return Made(role, path, 0.0, True, 0)
     log.info(f"running {role} -> {path}")
@@ -176,17 +176,16 @@ def make_runs(run_dir: str, roles=None, sets: dict | None = None, shrink: bool =
               rerun: bool = False) -> tuple[dict, list[Made]]:
     """Every role's run (``ORDER``, or ``roles``) in ``run_dir``; returns (role -> parslip.open result on
     rank 0, what was made)."""
-    from ..analysis.paper import first_break_time
-    from ..analysis.results import open as open_run
+    from ...analysis.results import open as open_run
+    from .measures import first_break_time
     rank0 = comm is None or comm.Get_rank() == 0
     roles = [r for r in ORDER if roles is None or r in roles]
     runs, made = {}, []
     for role in roles:
         maps_duration = 0.0
         if role == MAPS:
-            tb = first_break_time(runs["shear"]) if rank0 and "shear" in runs else math.nan
-            if comm is not None:
-                tb = comm.bcast(tb, root=0)
+            # Only rank 0 holds the opened runs: it measures the first break, every rank takes its value.
+            tb = collective.decide(comm, lambda: first_break_time(runs["shear"]) if "shear" in runs else math.nan)
             if not math.isfinite(tb):
                 made.append(Made(role, "", 0.0, False, 1, "no shear run with a break to map"))
                 continue
@@ -216,7 +215,7 @@ def first_front_times(shear, maps) -> list[float]:
 def write_figures(runs: dict, fig_dir: str) -> list[str]:
     """Each run's figure set under ``fig_dir/<role>/`` (the l = 300/500 runs: space-time and speed only),
     the T0 stress maps from shear_maps, the v0 sweep and push against pull."""
-    from ..analysis import figures
+    from ...plot import figures
     paths = []
     for role, run in runs.items():
         if role == MAPS:

@@ -1,10 +1,10 @@
 """Measurements of the paper's quantitative statements on any run (``parslip.open`` results).
 
-Responsible for the numbers ``analysis.claims`` compares with the paper:
+Responsible for the numbers ``studies.paper.claims`` compares with the paper:
 nucleation times and sites, pulse intervals, speeds and accelerations,
 widths, the slip a front carries, slip velocities, interface stresses around
 a tip and the Mode II fit, re-attachment behind a fast front.  Each function
-takes runs, never starts one (``parslip.studies`` does that), and returns
+takes runs, never starts one (``studies.paper.study`` does that), and returns
 NaN (or None) when the run does not hold what it needs.
 
 Units: t in l/c_r, x and slip in l, speeds in c_r, widths in lattice
@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .fronts import MAX_GAP
+from ...analysis.fronts import MAX_GAP
 
 EDGE = 0.05          # l: a front "nucleates at the driven edge" within this distance of it
 STEADY = (0.1, 0.6)  # distance from the nucleation site (l) where pulses run at their steady speed
@@ -94,7 +94,7 @@ def pulse_share(run) -> float:
 
 
 def first_break_time(run) -> float:
-    from .fronts import first_break
+    from ...analysis.fronts import first_break
     t, _ = first_break(run.interface)
     return math.nan if t is None else t
 
@@ -562,7 +562,7 @@ def centre_over_edges(run, field: str = "sxy") -> float:
 
 def tip_peak(run, front, t: float, field: str = "sxy", sites: int = 5) -> float:
     """Largest ``field`` over the ``sites`` sites ahead of ``front``'s tip at the frame nearest ``t``."""
-    from .figures import tip_profile
+    from ...plot.figures import tip_profile
     _, s = tip_profile(run, front, t, field, sites)
     return float(np.max(s)) if len(s) else math.nan
 
@@ -588,7 +588,7 @@ def mode2_r2(run, front_index: int, times, sites: int = 8) -> float:
     """Median R^2 of the Mode II fits (appendix B) of a front at ``times``: the straight line
     sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2 through the ``sites`` sites ahead of its tip.  A fit with
     K_II undefined (sigma^-2 not rising with xi) counts as R^2 = 0."""
-    from .figures import mode2_fit, tip_profile
+    from ...plot.figures import mode2_fit, tip_profile
     fr = run.fronts()
     if len(fr) <= front_index:
         return math.nan

@@ -10,7 +10,7 @@ came from without a side file:
 ``source`` is a run (``parslip.open``), a list of runs, a sweep table (a dict of columns with
 ``scene`` and ``commit``, as ``parslip sweep`` writes them) or a dict {"scene": ..., "commit": ...}.
 
-    from parslip.analysis.provenance import read_png
+    from parslip.plot.provenance import read_png
     read_png("docs/studies/img/push_spacetime.png")   # {"commit": [...], "scenes": [{...}]}
 """
 from __future__ import annotations

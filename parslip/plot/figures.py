@@ -42,7 +42,7 @@ def pyplot():
 
 def save(fig, out_dir: str, name: str, source=None) -> list[str]:
     """Write ``name``.png and ``name``.pdf in ``out_dir``, stamped with the scene(s) and commit of
-    ``source`` (runs or a sweep table: ``analysis.provenance``); close the figure; return both paths."""
+    ``source`` (runs or a sweep table: ``plot.provenance``); close the figure; return both paths."""
     from .provenance import savefig_metadata
     plt = pyplot()
     os.makedirs(out_dir, exist_ok=True)
@@ -366,7 +366,7 @@ def fig_pulse_width(run, out_dir: str, n: int = 4) -> list[str]:
     return _finish(fig, ax, run, out_dir, "pulse_width", "x_tip / l", ("width / a",))
 
 
-# --- stress maps (rendered by parslip.analysis.render when present) --------------
+# --- stress maps (rendered by parslip.plot.render when present) --------------
 
 def map_times(run) -> list[float]:
     """Times of the stress maps (Figs. 3a, 5a, 7a, 8): the first front's nucleation, the fourth's (or
@@ -384,7 +384,7 @@ def map_times(run) -> list[float]:
 
 def fig_stress_maps(run, out_dir: str, fields=("sxy", "sxx"), times=None) -> list[str]:
     """sigma_xy and sigma_xx over the lattice with the interface bonds in red, rendered off screen by
-    ``parslip.analysis.render.render_frame``; skipped with a logged note when that module is absent."""
+    ``parslip.plot.render.render_frame``; skipped with a logged note when that module is absent."""
     from . import render
     if importlib.util.find_spec("pyvista") is None:
         log.warning("stress maps skipped: they are drawn with pyvista, which is not installed; accepted: install "
@@ -473,7 +473,7 @@ def fig_stick_slip(run, out_dir: str) -> list[str]:
     trough, and the precursors (fronts arrested inside the contact) marked at their arrest; beside it
     each event's mu before and after against the loader's displacement, and every precursor's arrest
     length against F_T/F_N at its arrest."""
-    from .friction import MIN_DROP, mu as mu_of
+    from ..analysis.friction import MIN_DROP, mu as mu_of
     if "mu" not in run.interface:
         log.info("stick-slip figure skipped: the record holds no /interface/mu")
         return []

@@ -3,12 +3,12 @@
 Responsible for the claims table of ``parslip paper``: each claim's text, its
 source in ``onset-of-slip.tex`` (section and a short quote), the paper's
 value, the units, the tolerance (an ``Accept`` object built here, with the
-reason it is that wide) and the measurement (``analysis.paper``) on a dict of
+reason it is that wide) and the measurement (``studies.paper.measures``) on a dict of
 runs by role; ``evaluate`` turns runs into rows with a verdict.  A claim
 whose runs are missing or hold too little is "not measured", which counts
 against the share that agrees.
 
-Roles (``parslip.studies.paper.ROLES`` makes them): push, pull, shear (T0 to
+Roles (``parslip.studies.paper.study.ROLES`` makes them): push, pull, shear (T0 to
 300 l/c_r: three fronts), push_v0_1e-2, push_v0_1e-4 (the v0 sweep),
 push_l300, pull_l300, shear_l300, shear_l500 (Sec. 4.4).  Units: t in
 l/c_r, x and slip in l, speeds in c_r, widths in a, stresses in rho c_r^2.
@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
-from . import paper as measure
+from . import measures as measure
 
 AGREES, DISAGREES, NOT_MEASURED = "agrees", "disagrees", "not measured"
 VERDICTS = (AGREES, DISAGREES, NOT_MEASURED)
@@ -132,7 +132,7 @@ def fmt(v) -> str:
     return f"{v:.4g}"
 
 
-# The runs a claim needs, by role (``parslip.studies.paper.ROLES``).
+# The runs a claim needs, by role (``parslip.studies.paper.study.ROLES``).
 PUSH_RUN = ("push",)
 PULL_RUN = ("pull",)
 SHEAR_RUN = ("shear",)

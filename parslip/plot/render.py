@@ -9,7 +9,7 @@ time.  It reads runs only through ``parslip.open`` (``Run.snapshot_times``,
 ``Run.snapshot(k)``), and renders with pyvista off screen (EGL; no display).
 
     import parslip
-    from parslip.analysis.render import render_frame, render_movie
+    from parslip.plot.render import render_frame, render_movie
     run = parslip.open("out/push.vtkhdf")
     render_frame(run, "sxy", 50.0, "sxy_t50.png")      # time in l/c_r, nearest snapshot
     render_movie(run, "sxy", "sxy.mp4")                # every snapshot, one scale for all
