@@ -3,8 +3,9 @@
 ``figures`` the paper's figure set for one run and the run's space-time picture; ``maps`` an observable of
 a sweep over two keys (``parslip map``); ``render`` whole-lattice snapshots off screen (``parslip render``);
 ``scene_picture`` the model picture of a scene (``parslip draw``, the docs' model figure); ``provenance``
-the scene(s) and commit stamped into every picture.  Measures stay in ``analysis``: nothing here computes
-a number a table or a claim reports.  Importing this package loads no plotting library.
+the scene(s) and commit stamped into every picture.  Measures belong to ``analysis`` (the tip profile and
+the Mode II fit that ``figures`` still computes are the exception the paper's measures read).  Importing
+this package loads no plotting library.
 """
 
 
