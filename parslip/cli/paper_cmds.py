@@ -7,7 +7,6 @@ tables, ``claims`` and ``measures`` compare them with the paper).
 from __future__ import annotations
 
 import argparse
-import os
 
 PAPER_HELP = """Run (or reuse, from OUT/runs/) every scene the paper's claims need, then write
 OUT/claims.md and OUT/claims.json (each claim: the paper's value, parslip's,

@@ -11,7 +11,6 @@ the same layout.  Either way the file is identical for any rank count.
 """
 from __future__ import annotations
 
-import os
 import sys
 import time
 
