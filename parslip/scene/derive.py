@@ -110,7 +110,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     big = law.largest(lat.n_top_sites if lat.has_interface else 0)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         big["kx"], big["ky"], **drive.stability_key())
+                                         big["kx"], law.normal_stiffness(big["ky"]), **drive.stability_key())
     else:
         omega, method = omega
     limit = _dt_max(omega)

@@ -106,6 +106,9 @@ SCHEMA: dict[str, Key] = {
     "interface.heal_time": Key(0.0, float, "l/c_r", ">= 0 (0 = at once, the paper)", _range(0.0),
                                "a free site re-bonds only after claiming the same substrate site (the nearest "
                                "free one within reach) for this long; the clock restarts when the claim changes"),
+    "interface.contact": Key(0.0, float, "m c^2/a^2", ">= 0 (0 = none, the paper)", _range(0.0),
+                             "stiffness of the frictionless contact that keeps an unbonded top site at least "
+                             "delta0 above the substrate's surface (a one-sided spring; enters omega_max)"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
                                 "largest interface slip the MPI halo must reach across"),
     # load and drive -------------------------------------------------------------
