@@ -137,6 +137,9 @@ SCHEMA: dict[str, Key] = {
     "time.dt": Key(0.0, float, "a/c", "0 (auto) or 0 < dt < 2/omega_max", _range(0.0),
                    "explicit time step; overrides time.safety"),
     "time.zeta": Key(0.1, float, "c/a", ">= 0", _range(0.0), "velocity damping"),
+    "time.damping": Key("absolute", str, "-", "'absolute' or 'bonds'", _choice("absolute", "bonds"),
+                        "what zeta damps: 'absolute' every node's velocity (the paper's body drag), 'bonds' each "
+                        "bulk bond's rate of deformation (a rigid translation is not braked; shortens dt)"),
     "time.precision": Key("float64", str, "-", "'float64' or 'float32'", _choice("float64", "float32"),
                           "float type of the state; float32 stores displacements from the reference lattice"),
     # output -------------------------------------------------------------------
