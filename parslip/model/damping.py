@@ -48,6 +48,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .stability import dt_max
+
 FORMS = ("absolute", "bonds")
 
 
@@ -98,9 +100,9 @@ class Damping:
     def dt_limit(self, omega_max: float, kns) -> float:
         """The largest stable dt (a/c) with the lattice's highest frequency omega_max and its blocks' k_n."""
         if not self.rated:
-            return 2.0 / omega_max
+            return dt_max(omega_max)
         b = max(self.beta(k) for k in kns)
-        return math.sqrt(b * b + (2.0 / omega_max) ** 2) - b
+        return math.sqrt(b * b + dt_max(omega_max) ** 2) - b
 
     def unlike_reference(self) -> list[str]:
         """The damping options the reference engine (the paper's body drag) does not have, as "key = value"."""
