@@ -110,7 +110,8 @@ def _time_lines(st) -> list[str]:
         _line("Rayleigh speed", f"c_r = {mat.c_r:.6g} = {mat.c_r / mat.c_s:.5f} c_s (classical root, used for units)"),
         _line("surface wave", f"{mat.c_surface_born:.6g} = {mat.c_surface_born / mat.c_s:.5f} c_s "
                               "(the Born lattice's own: k_t resists rotation)"),
-        _line("stability", f"omega_max = {st.omega_max:.6g} ({_how(st.omega_method)}): dt < 2/omega_max = "
+        _line("stability", f"omega_max = {st.omega_max:.6g} ({_how(st.omega_method)}): dt < "
+                           f"{'sqrt(beta^2 + (2/omega_max)^2) - beta' if st.damping.rated else '2/omega_max'} = "
                            f"{st.dt_limit:.6g}  |  paper's dt < a/c_l = {st.dt_paper:.6g}"
                            + (" (not enough here)" if st.dt_paper >= st.dt_limit else "")),
         _line("time step", f"dt = {st.dt:.6g} a/c ({st.dt / st.dt_limit:.3f} of the limit"

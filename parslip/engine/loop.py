@@ -55,10 +55,11 @@ from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
 from .kernels.scheme import ramp_share
-from .kernels.stencil import node_masked, row_edge, row_full
+from .kernels.stencil import K_RATE, node_masked, rate_field, row_edge, row_full
 
-# State: each block as [row, column] arrays, x and y apart, at two Verlet levels.
-Levels = namedtuple("Levels", "bx0 by0 bx1 by1 tx0 ty0 tx1 ty1")
+# State: each block as [row, column] arrays, x and y apart, at two Verlet levels; and the field z whose bond
+# forces the update takes with the bonds' damping (``kernels.stencil.rate_field``; 1 x 1 arrays without it).
+Levels = namedtuple("Levels", "bx0 by0 bx1 by1 tx0 ty0 tx1 ty1 zbx zby ztx zty")
 # One level: (bx, by, tx, ty).
 Level = namedtuple("Level", "bx by tx ty")
 # The row schedule (``parallel.layout``): tasks of TASK_DTYPE and ptr[phase, block, ROWS | NODES | END].
@@ -84,10 +85,11 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   brow                    array row of the substrate's interface row
 #   dt, v0, fext, jump      time step (a/c), drive speed (a c/a), load per node at full F_N, runaway limit (a)
 #   cf, inv_cf, damped      C = dt^2/(1 + zeta dt/2) in the state's float type, 1/C, zeta > 0
+#   rated                   the bonds' damping: bond forces are taken on z = u + g (u - u_prev) (``K_RATE``)
 #   event_limit             events a rank may hold at an agreement before every rank returns EVENTS_FULL
 #   spring, v0dt            the loader spring k_s (m c^2/a^2, with DRIVE_SPRING) and v0 dt (a), in the float type
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
-                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt")
+                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated")
 
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
@@ -160,8 +162,8 @@ def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm):
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _rows(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy):
-    """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN)."""
+def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy):
+    """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y)."""
     cf = prm.cf
     damped = prm.damped
     zero = like(0, cf)
@@ -170,20 +172,20 @@ def _rows(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, driv
         r, j0, n, s = tk.row, tk.j0, tk.n, tk.s
         g = gy if tk.load else zero
         if tk.kind == FULL:
-            row_full(cur_x, cur_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped)
+            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped)
         elif tk.extra:
-            row_edge(cur_x, cur_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf, ex, ey,
-                     zero, g)
+            row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf,
+                     ex, ey, zero, g)
         else:
-            row_edge(cur_x, cur_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf, zeros,
-                     zeros, zero, g)
+            row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf,
+                     zeros, zeros, zero, g)
         if tk.drive and drive_on:
             for j in range(j0, j0 + n):
                 _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _nodes(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy):
+def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
     cf = prm.cf
     damped = prm.damped
@@ -192,17 +194,17 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, nxt_x, nxt_y, K, prm, ex, ey, drive, dri
         tk = tasks[t]
         r, j, s = tk.row, tk.j0, tk.s
         if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            row_full(cur_x, cur_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped)   # interior node cut by a slab edge
+            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped)   # interior node, slab edge
         else:
             fx = ex[j] if tk.extra else zero
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
-            node_masked(cur_x, cur_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy)
+            node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy)
         if tk.drive and drive_on:
             _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm)
 
 
 @njit(cache=True, _nrt=False)
-def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy):
+def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
     move the halo messages halfway through (``progress``, a no-op on one rank)."""
     tasks = sched.tasks
@@ -211,19 +213,19 @@ def _tasks(phase, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, 
     # A call passes a few hundred bytes of array descriptors: skip the empty ones (one rank has no EARLY
     # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
     if pb[NODES] > pb[ROWS]:
-        _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y,
-              iface.zeros, drive, 0, shift, gy)
+        _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
+              iface.exb_y, iface.zeros, drive, 0, shift, gy)
     if phase == LATE:
         progress(plan)
     if pb[END] > pb[NODES]:
-        _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, nxt.bx, nxt.by, K, prm, iface.exb_x, iface.exb_y, drive,
-               0, shift, gy)
+        _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
+               iface.exb_y, drive, 0, shift, gy)
     if pt[NODES] > pt[ROWS]:
-        _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y,
-              iface.zeros, drive, drive_on, shift, gy)
+        _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
+              iface.ext_y, iface.zeros, drive, drive_on, shift, gy)
     if pt[END] > pt[NODES]:
-        _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x, iface.ext_y, drive,
-               drive_on, shift, gy)
+        _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
+               iface.ext_y, drive, drive_on, shift, gy)
 
 
 @njit(cache=True, _nrt=False)
@@ -279,7 +281,7 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
 
 
 @njit(cache=True, _nrt=False)
-def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
+def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag):
     """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1); ``n1`` is where the
     call that takes this step ends."""
     n_ds = prm.n_drive_start
@@ -306,12 +308,17 @@ def _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag):
             iface.reach[0] = -1
         if not ik.coverage(cur.tx[PAD], cur.bx[br], iface.geom):
             _flag(flags, FLAG_REACH, n, 1, 0, -1, 0.0)
+    src = cur
+    if prm.rated:              # the bonds' damping: bond forces on z = u(n) + g (u(n) - u(n-1)), whole blocks
+        rate_field(cur.bx, cur.by, nxt.bx, nxt.by, z.bx, z.by, K[0, K_RATE])
+        rate_field(cur.tx, cur.ty, nxt.tx, nxt.ty, z.tx, z.ty, K[1, K_RATE])
+        src = z
     t1 = now_ns(clk) if timed else 0
-    _tasks(EARLY, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
+    _tasks(EARLY, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
     t2 = now_ns(clk) if timed else 0
     err = post(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     t3 = now_ns(clk) if timed else 0
-    _tasks(LATE, sched, cur, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
+    _tasks(LATE, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
     t4 = now_ns(clk) if timed else 0
     err |= complete(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     if timed:
@@ -390,7 +397,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
             beat[BEAT_IN_LOOP] = 0
             return n, DONE
         nxt = _level(lv, n + 1)
-        _step(n, n1, cur, nxt, plan, sched, K, prm, iface, drive, diag)
+        _step(n, n1, cur, nxt, Level(lv.zbx, lv.zby, lv.ztx, lv.zty), plan, sched, K, prm, iface, drive, diag)
         if (n + 1) % check == 0:
             t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
             _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)

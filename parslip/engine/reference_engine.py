@@ -46,7 +46,7 @@ class Simulation:
         s, lat, mat = setup.scene, setup.lattice, setup.material
         if lat.rigid:
             raise NotImplementedError("the reference implementation has no rigid substrate")
-        unlike = setup.drive.unlike_reference() + setup.law.unlike_reference()
+        unlike = setup.drive.unlike_reference() + setup.damping.unlike_reference() + setup.law.unlike_reference()
         if unlike:
             raise NotImplementedError(f"the reference implementation has not {', '.join(unlike)}")
         self.layout = lay = _SerialLayout(lat)

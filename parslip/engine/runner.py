@@ -241,7 +241,7 @@ class Job:
             log.warning(line)
         name = os.fspath(self.scene) if isinstance(self.scene, (str, os.PathLike)) else "scene"
         log.info(f"{name}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
-                 f"({st.dt / st.dt_limit:.2f} of 2/omega_max), {st.n_steps} steps -> {self.out}"
+                 f"({st.dt / st.dt_limit:.2f} of the stability limit), {st.n_steps} steps -> {self.out}"
                  + (f"; continuing from step {self.sim.n} ({self.plan.checkpoint})" if self.plan.checkpoint else ""))
 
     def _make_control(self, watchdog, stop_after):

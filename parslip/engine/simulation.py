@@ -58,7 +58,7 @@ class Simulation:
             brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),
             fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
             cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=st.damping.damped,
-            event_limit=self.event_limit, spring=self.dtype.type(st.drive.spring),
+            event_limit=self.event_limit, spring=self.dtype.type(st.drive.spring), rated=st.damping.rated,
             v0dt=self.dtype.type(st.v0 * st.dt))
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))

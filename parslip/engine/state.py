@@ -22,13 +22,15 @@ from .loop import Drive, Levels
 
 def stiffness_constants(kn: float, kt: float, dt: float, damping) -> np.ndarray:
     """[C k_n, C k_t, C A, C B', C C', B] of ``kernels.stencil``: A = (k_n-k_t)/4 + k_t, B' = sqrt(3)(k_n-k_t)/4,
-    C' = 3(k_n-k_t)/4 + k_t; C and B the damped update's factors (``model.damping.Damping``)."""
-    from .kernels.stencil import K_A, K_B, K_C, K_DAMP, K_N, K_SIZE, K_T
+    C' = 3(k_n-k_t)/4 + k_t; C and B the damped update's factors, and g the bonds' damping gain
+    (``model.damping.Damping``), in K_RATE."""
+    from .kernels.stencil import K_A, K_B, K_C, K_DAMP, K_N, K_RATE, K_SIZE, K_T
     d = kn - kt
     cf = damping.force_factor(dt)
     k = np.zeros(K_SIZE)
     k[K_N], k[K_T], k[K_A] = cf * kn, cf * kt, cf * (d / 4 + kt)
     k[K_B], k[K_C], k[K_DAMP] = cf * (np.sqrt(3.0) * d / 4), cf * (3 * d / 4 + kt), damping.carry(dt)
+    k[K_RATE] = damping.rate_gain(kn, dt)
     return k
 
 
@@ -72,7 +74,9 @@ class State:
         lat, mat, sc = setup.lattice, setup.material, setup.scene
         bl, tl = layout.blocks
 
-        self.levels = Levels(*_arena([bl.shape] * 4 + [tl.shape] * 4, dt))
+        # The bonds' damping takes the bond forces on a field z of its own (``loop.Levels``): whole blocks then.
+        zs = [bl.shape] * 2 + [tl.shape] * 2 if setup.damping.rated else [(1, 1)] * 4
+        self.levels = Levels(*_arena([bl.shape] * 4 + [tl.shape] * 4, dt), *(np.zeros(z, dt) for z in zs))
         damping = setup.damping
         self.K = np.array([stiffness_constants(mat.kn_bottom, mat.kt_bottom, setup.dt, damping),
                            stiffness_constants(mat.kn_top, mat.kt_top, setup.dt, damping)], dt)

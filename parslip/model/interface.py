@@ -22,6 +22,25 @@ function in ``engine.kernels.interface``:
              restarts from zero whenever the claim changes or lapses (the site leaves reach, or another
              site takes the bottom site first).  0: at once (the paper)
 
+Contact (``contact`` = k_c > 0; 0, the paper: none).  A top site with no bond
+(after this step's breaks and re-formations) is kept off the substrate by a
+frictionless one-sided spring.  The substrate's surface under it is the
+segment between the two substrate interface sites whose current x bracket
+the site's current x (q + u_x,q <= x < q + 1 + u_x,q+1; none beyond the
+substrate's ends).  With e = p_(q+1) - p_q the segment, n = (-e_y, e_x)/|e|
+its upward normal, r = p_top - p_q and w = r.e/|e|^2 (clipped to [0, 1]):
+
+    d = r . n                        the site's height above the surface (a); at rest d = delta0
+    f = k_c (delta0 - d) n           on the top node while d < delta0, else 0 (m c^2/a)
+    -(1 - w) f, -w f                 on the substrate sites q, q + 1
+
+so momentum is conserved; the force is normal to the surface (no friction).
+On a rigid substrate the surface is the flat line delta0 below the rest
+height of the block's bottom row.  A contact acts over at most 1 a + the
+substrate's drift, within one ``layout.Reach.link``: the halo that serves the
+bonds serves it.  k_c enters omega_max as a normal bond would
+(``normal_stiffness``): a site is bonded or in contact, never both.
+
 The per-site bond state is one table of named rows (``BOND_TABLE``) that the
 loop, the halo exchange, the checkpoint and the output share: each row says
 whether it travels with the halo exchange, how a checkpoint stores it and
@@ -126,7 +145,8 @@ EVENT_KINDS = {BREAK: "break", FORM: "re-formation"}
 # What the compiled update reads of the law besides the per-site rows, lengths in the state's float type:
 #   delta0 (a), rebond_length (a), reform, rebond and heal: the rules' codes; heal_du = heal_speed dt (a):
 #   the largest relative x-displacement per step at which a site re-bonds; n_heal = ceil(heal_time/dt).
-Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal")
+#   contact (m c^2/a^2): the stiffness of the unbonded sites' contact with the substrate (0: none).
+Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact")
 
 
 PATCH_KEYS = ("kx", "ky", "delta_b")
@@ -202,6 +222,7 @@ class InterfaceLaw:
     heal_time: float = 0.0       # l/c_r: re-bond only after claiming the same site this long (0: at once)
     patches: tuple = ()          # ((from, to), {"kx"|"ky"|"delta_b": value}) in order
     random: tuple = ()           # (key, cv, correlation in a, seed), or () for none
+    contact: float = 0.0         # m c^2/a^2: an unbonded site's contact stiffness (0: none, the paper)
 
     @classmethod
     def from_scene(cls, scene: dict) -> "InterfaceLaw":
@@ -216,7 +237,8 @@ class InterfaceLaw:
                                  for p in scene["interface.patch"]),
                    random=((scene["interface.random.key"], float(scene["interface.random.cv"]),
                             float(scene["interface.random.correlation"]), int(scene["interface.random.seed"]))
-                           if scene["interface.random.cv"] > 0 else ()))
+                           if scene["interface.random.cv"] > 0 else ()),
+                   contact=float(scene["interface.contact"]))
 
     @property
     def uniform(self) -> bool:
@@ -234,7 +256,7 @@ class InterfaceLaw:
         f = np.dtype(dtype).type
         return Rules(delta0=f(self.delta0), rebond_length=f(self.rebond_length), reform=self.reform,
                      rebond=self.rebond, heal=self.heal, heal_du=f(self.heal_speed * setup.material.c_r * setup.dt),
-                     n_heal=self.heal_steps(setup))
+                     n_heal=self.heal_steps(setup), contact=f(self.contact))
 
     def heal_steps(self, setup) -> int:
         """n_heal = ceil(heal_time / dt): the steps a claim must last before the site re-bonds (HEAL_TIME);
@@ -290,4 +312,11 @@ class InterfaceLaw:
             out.append("interface.heal_speed or interface.heal_time")
         if not self.uniform:
             out.append("interface.patch or interface.random")
+        if self.contact:
+            out.append(f"interface.contact = {self.contact!r}")
         return out
+
+    def normal_stiffness(self, ky: float) -> float:
+        """The stiffest normal spring a site can have, bond (``ky``, the largest over the sites) or contact:
+        what enters omega_max in the bond's place (a site is bonded or in contact, never both)."""
+        return max(ky, self.contact)

@@ -80,6 +80,11 @@ def warnings(setup) -> list[str]:
             f"load.FN = {s['load.FN']:g}: {s['load.FN'] / close:.0%} of the load that closes the mean gap "
             f"(N k_y delta0 = {close:.4g}); the mean gap at rest is {gap:.3g} a but single gaps spread about "
             f"it (the block tilts under its alternating row offsets), so parts of the interface may close")
+    if st.lattice.has_interface and st.law.heal and st.law.contact == 0:
+        out.append(
+            "interface.contact = 0 with healing on (interface.heal_speed or heal_time): a site whose bond does "
+            "not re-form at once feels no force from the substrate, so under load.FN unbonded sites can sink "
+            "through the substrate; set interface.contact > 0 (e.g. the bonds' ky) to keep them above it")
     mode = s["drive.mode"]
     if mode != "none":
         v0 = s["drive.v0"]

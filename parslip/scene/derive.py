@@ -16,7 +16,6 @@ from ..model.drive import Drive
 from ..model.interface import InterfaceLaw
 from ..model.lattice import Lattice
 from ..model.physics import Material
-from ..model.stability import dt_max as _dt_max
 from ..model.stability import omega_max as _omega_max
 from ..parallel.layout import Reach, interface_reach, max_ranks
 from . import limits
@@ -32,7 +31,7 @@ class Setup:
     t_unit: float            # l/c_r in internal time
     omega_max: float
     omega_method: str        # "lanczos" (exact) or "bound" (rigorous upper bound)
-    dt_limit: float          # 2/omega_max
+    dt_limit: float          # the largest stable dt: 2/omega_max, less with the bonds' damping (``model.damping``)
     dt_paper: float          # a/c_l of the top block (the paper's criterion)
     dt: float
     n_ramp: int
@@ -110,13 +109,15 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     big = law.largest(lat.n_top_sites if lat.has_interface else 0)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         big["kx"], big["ky"], **drive.stability_key())
+                                         big["kx"], law.normal_stiffness(big["ky"]), **drive.stability_key())
     else:
         omega, method = omega
-    limit = _dt_max(omega)
+    damping = Damping.from_scene(scene)
+    limit = damping.dt_limit(omega, [mat.kn_bottom, mat.kn_top])
     dt = scene["time.dt"] if scene["time.dt"] > 0 else scene["time.safety"] * limit
     if dt >= limit:
-        raise ConfigError(f"time.dt = {scene['time.dt']!r}: above the stability limit 2/omega_max = {limit:.6g} a/c "
+        what = "sqrt(beta^2 + (2/omega_max)^2) - beta (time.damping = 'bonds')" if damping.rated else "2/omega_max"
+        raise ConfigError(f"time.dt = {scene['time.dt']!r}: above the stability limit {what} = {limit:.6g} a/c "
                           f"(omega_max = {omega:.6g}); accepted: 0 (auto) or 0 < dt < {limit:.6g}")
     l = lat.contact_length
     t_unit = l / mat.c_r
@@ -132,6 +133,6 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=drive.speed(mat.c_r),
                slip_reach=reach, reach=interface_reach(law.rebond_length, big["delta_b"], reach),
-               precision=scene["time.precision"], law=law, drive=drive, damping=Damping.from_scene(scene))
+               precision=scene["time.precision"], law=law, drive=drive, damping=damping)
     limits.check_setup(st)
     return st

@@ -106,6 +106,9 @@ SCHEMA: dict[str, Key] = {
     "interface.heal_time": Key(0.0, float, "l/c_r", ">= 0 (0 = at once, the paper)", _range(0.0),
                                "a free site re-bonds only after claiming the same substrate site (the nearest "
                                "free one within reach) for this long; the clock restarts when the claim changes"),
+    "interface.contact": Key(0.0, float, "m c^2/a^2", ">= 0 (0 = none, the paper)", _range(0.0),
+                             "stiffness of the frictionless contact that keeps an unbonded top site at least "
+                             "delta0 above the substrate's surface (a one-sided spring; enters omega_max)"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
                                 "largest interface slip the MPI halo must reach across"),
     # load and drive -------------------------------------------------------------
@@ -134,6 +137,9 @@ SCHEMA: dict[str, Key] = {
     "time.dt": Key(0.0, float, "a/c", "0 (auto) or 0 < dt < 2/omega_max", _range(0.0),
                    "explicit time step; overrides time.safety"),
     "time.zeta": Key(0.1, float, "c/a", ">= 0", _range(0.0), "velocity damping"),
+    "time.damping": Key("absolute", str, "-", "'absolute' or 'bonds'", _choice("absolute", "bonds"),
+                        "what zeta damps: 'absolute' every node's velocity (the paper's body drag), 'bonds' each "
+                        "bulk bond's rate of deformation (a rigid translation is not braked; shortens dt)"),
     "time.precision": Key("float64", str, "-", "'float64' or 'float32'", _choice("float64", "float32"),
                           "float type of the state; float32 stores displacements from the reference lattice"),
     # output -------------------------------------------------------------------

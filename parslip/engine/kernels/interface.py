@@ -18,7 +18,9 @@ and the opposite force on the bottom node.  Each step, at positions u(t):
 3. claims are granted in increasing top-site order, so when two free top
    sites reach the same bottom site the lower global index wins and the
    other waits a step; a re-formed bond takes its rest offset by the rule
-   ``_rest_offset`` (0, or x_ij: unstressed in x).
+   ``_rest_offset`` (0, or x_ij: unstressed in x);
+4. with a contact stiffness (``interface.contact``), each site still free
+   is pushed off the substrate's surface (``_contacts``).
 
 The law's parameters and rule codes come from ``model.interface``; each rule
 is one inlined function below, chosen by its code.
@@ -153,6 +155,8 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
     nfree = _breaks(n, tx, ty, bx, by, it, zero)
     _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero)
     _grants(n, nfree, tx, ty, bx, by, it, zero)
+    if it.rules.contact > zero:
+        _contacts(nfree, tx, ty, bx, by, it)
 
 
 @njit(cache=True, _nrt=False)
@@ -259,6 +263,55 @@ def _grants(n, nfree, tx, ty, bx, by, it, zero):
         if top_own:
             it.counters[FORMS] += 1
             _event(it.events, n, j + site0, FORM, i + bbase)
+
+
+@njit(cache=True, _nrt=False)
+def _contacts(nfree, tx, ty, bx, by, it):
+    """4. Contact: each site still free after the grants, in increasing site order, is pushed off the
+    substrate's surface (``model.interface``: the segment between the two substrate sites that bracket its
+    current x) by f = k_c (delta0 - d) along the segment's normal when its distance d is below delta0; the
+    opposite force goes to the segment's ends by the interpolation weights (1 - w, w).  A substrate site
+    gathers the contacts of the sites around it in site order, after its bond's force."""
+    g, p, claim, reach = it.geom, it.rules, it.claim, it.reach
+    tbase, bbase, thi, d0, kc = g.tbase, g.bbase, g.thi, p.delta0, p.contact
+    one = like(1, d0)
+    for m in range(nfree):
+        c = claim[m]
+        j = -1 - c if c < 0 else c % (thi + 1)
+        if _partner(it.bonds, j) >= 0:
+            continue
+        gl = j + tbase
+        x = like(gl, d0) + tx[j]                              # the site's x, in substrate columns
+        q = np.int64(np.floor(x))
+        if q < 0 or q + 1 >= g.bcols:
+            continue                                          # beyond the substrate's ends: no surface
+        i = q - bbase
+        if i - 1 < g.blo or i + 2 > g.bhi:
+            if g.town0 <= j < g.town1 and reach[0] < 0:
+                reach[0] = gl
+            continue
+        if x < q + bx[i]:                                     # the bracketing pair, as the sites have drifted
+            i -= 1
+        elif x >= q + 1 + bx[i + 1]:
+            i += 1
+        ex, ey = one + (bx[i + 1] - bx[i]), by[i + 1] - by[i]
+        rx, ry = like(gl - (i + bbase), d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
+        ln = np.sqrt(ex * ex + ey * ey)
+        nx, ny = -ey / ln, ex / ln
+        d = rx * nx + ry * ny
+        if d >= d0:
+            continue
+        w = min(max((rx * ex + ry * ey) / (ln * ln), 0 * one), one)
+        f = kc * (d0 - d)
+        if g.town0 <= j < g.town1:
+            it.ext_x[j] = f * nx
+            it.ext_y[j] = f * ny
+        if g.bown0 <= i < g.bown1:
+            it.exb_x[i] -= (one - w) * f * nx
+            it.exb_y[i] -= (one - w) * f * ny
+        if g.bown0 <= i + 1 < g.bown1:
+            it.exb_x[i + 1] -= w * f * nx
+            it.exb_y[i + 1] -= w * f * ny
 
 
 @njit(cache=True, inline="always", _nrt=False)

@@ -44,9 +44,10 @@ from .floats import like
 
 # Bits of the neighbour mask: right, up-right, up-left, left, down-left, down-right.
 R_, UR_, UL_, L_, DL_, DR_ = 1, 2, 4, 8, 16, 32
-# Columns of a block's row of constants K[b] (``engine.state.stiffness_constants`` fills them by these names).
-K_N, K_T, K_A, K_B, K_C, K_DAMP = range(6)
-K_SIZE = 6
+# Columns of a block's row of constants K[b] (``engine.state.stiffness_constants`` fills them by these names);
+# K_RATE: the gain g of ``rate_field`` (0 without the bonds' damping).
+K_N, K_T, K_A, K_B, K_C, K_DAMP, K_RATE = range(7)
+K_SIZE = 7
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
@@ -60,35 +61,37 @@ def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_full(cx, cy, px, py, r, j0, n, s, K, blk, damped):
-    """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py."""
+def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped):
+    """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
+    forces are those of the field (zx, zy) (u(t) itself, or with the bonds' damping ``rate_field``)."""
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
-    xm, x0, xp = cx[r, j0 - 1:j0 - 1 + n], cx[r, j0:j0 + n], cx[r, j0 + 1:j0 + 1 + n]
-    ym, y0, yp = cy[r, j0 - 1:j0 - 1 + n], cy[r, j0:j0 + n], cy[r, j0 + 1:j0 + 1 + n]
-    xul, xur = cx[r + 1, j0 - 1 + s:j0 - 1 + s + n], cx[r + 1, j0 + s:j0 + s + n]
-    yul, yur = cy[r + 1, j0 - 1 + s:j0 - 1 + s + n], cy[r + 1, j0 + s:j0 + s + n]
-    xdl, xdr = cx[r - 1, j0 - 1 + s:j0 - 1 + s + n], cx[r - 1, j0 + s:j0 + s + n]
-    ydl, ydr = cy[r - 1, j0 - 1 + s:j0 - 1 + s + n], cy[r - 1, j0 + s:j0 + s + n]
+    xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
+    ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
+    xul, xur = zx[r + 1, j0 - 1 + s:j0 - 1 + s + n], zx[r + 1, j0 + s:j0 + s + n]
+    yul, yur = zy[r + 1, j0 - 1 + s:j0 - 1 + s + n], zy[r + 1, j0 + s:j0 + s + n]
+    xdl, xdr = zx[r - 1, j0 - 1 + s:j0 - 1 + s + n], zx[r - 1, j0 + s:j0 + s + n]
+    ydl, ydr = zy[r - 1, j0 - 1 + s:j0 - 1 + s + n], zy[r - 1, j0 + s:j0 + s + n]
+    cx0, cy0 = cx[r, j0:j0 + n], cy[r, j0:j0 + n]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
     # Two copies of the loop, so neither holds a branch: with zeta = 0 the damping factor is skipped.
     if damped:
         for k in range(n):
-            ux, uy = x0[k], y0[k]
-            fx, fy = _full(ux, uy, xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k], ydl[k],
-                           yul[k], ydr[k], kn, kt, a, b, c)
+            ux, uy = cx0[k], cy0[k]
+            fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
+                           ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
             ox[k] = ux + (bb * (ux - ox[k]) + fx)
             oy[k] = uy + (bb * (uy - oy[k]) + fy)
     else:
         for k in range(n):
-            ux, uy = x0[k], y0[k]
-            fx, fy = _full(ux, uy, xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k], ydl[k],
-                           yul[k], ydr[k], kn, kt, a, b, c)
+            ux, uy = cx0[k], cy0[k]
+            fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
+                           ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
             ox[k] = ux + ((ux - ox[k]) + fx)
             oy[k] = uy + ((uy - oy[k]) + fy)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_edge(cx, cy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy):
+def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy):
     """Row segment of a block's top row (``up`` False: no up bonds) or bottom row (``up`` True: no down bonds).
 
     Adds C (ex + gx, ey + gy): the per-column external force (ex, ey), e.g.
@@ -96,12 +99,13 @@ def row_edge(cx, cy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy
     """
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     rr = r + 1 if up else r - 1
-    xm, x0, xp = cx[r, j0 - 1:j0 - 1 + n], cx[r, j0:j0 + n], cx[r, j0 + 1:j0 + 1 + n]
-    ym, y0, yp = cy[r, j0 - 1:j0 - 1 + n], cy[r, j0:j0 + n], cy[r, j0 + 1:j0 + 1 + n]
+    xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
+    ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
+    cx0, cy0 = cx[r, j0:j0 + n], cy[r, j0:j0 + n]
     # The diagonal neighbour at c - 1 + s and the one at c + s.  Up: UL (K_UL) and UR (K_UR);
     # down: DL (K_UR) and DR (K_UL).  ``p`` is the one along K_UR, ``q`` along K_UL.
-    xa, xb = cx[rr, j0 - 1 + s:j0 - 1 + s + n], cx[rr, j0 + s:j0 + s + n]
-    ya, yb = cy[rr, j0 - 1 + s:j0 - 1 + s + n], cy[rr, j0 + s:j0 + s + n]
+    xa, xb = zx[rr, j0 - 1 + s:j0 - 1 + s + n], zx[rr, j0 + s:j0 + s + n]
+    ya, yb = zy[rr, j0 - 1 + s:j0 - 1 + s + n], zy[rr, j0 + s:j0 + s + n]
     exs, eys = ex[j0:j0 + n], ey[j0:j0 + n]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
     if up:
@@ -111,18 +115,19 @@ def row_edge(cx, cy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy
     one = like(1, bb)
     damp = bb if damped else one
     for k in range(n):
-        ux, uy = x0[k], y0[k]
-        hx, hy = (xm[k] - ux) + (xp[k] - ux), (ym[k] - uy) + (yp[k] - uy)
-        dpx, dpy = xp_[k] - ux, yp_[k] - uy
-        dqx, dqy = xq_[k] - ux, yq_[k] - uy
+        zx0, zy0 = x0[k], y0[k]
+        hx, hy = (xm[k] - zx0) + (xp[k] - zx0), (ym[k] - zy0) + (yp[k] - zy0)
+        dpx, dpy = xp_[k] - zx0, yp_[k] - zy0
+        dqx, dqy = xq_[k] - zx0, yq_[k] - zy0
         fx = kn * hx + a * (dpx + dqx) + b * (dpy - dqy) + cf * (exs[k] + gx)
         fy = kt * hy + b * (dpx - dqx) + c * (dpy + dqy) + cf * (eys[k] + gy)
+        ux, uy = cx0[k], cy0[k]
         ox[k] = ux + (damp * (ux - ox[k]) + fx)
         oy[k] = uy + (damp * (uy - oy[k]) + fy)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def node_masked(cx, cy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy):
+def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy):
     """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
 
     Without branches: a missing neighbour is read from the zero ghost cells
@@ -130,17 +135,30 @@ def node_masked(cx, cy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy):
     """
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     ux, uy = cx[r, j], cy[r, j]
+    vx, vy = zx[r, j], zy[r, j]
     wr, wur, wul = like(mask & R_, ux), like((mask & UR_) >> 1, ux), like((mask & UL_) >> 2, ux)
     wl, wdl, wdr = like((mask & L_) >> 3, ux), like((mask & DL_) >> 4, ux), like((mask & DR_) >> 5, ux)
-    hx = wl * (cx[r, j - 1] - ux) + wr * (cx[r, j + 1] - ux)
-    hy = wl * (cy[r, j - 1] - uy) + wr * (cy[r, j + 1] - uy)
+    hx = wl * (zx[r, j - 1] - vx) + wr * (zx[r, j + 1] - vx)
+    hy = wl * (zy[r, j - 1] - vy) + wr * (zy[r, j + 1] - vy)
     # Along K_UR: up-right and down-left; along K_UL: up-left and down-right.
-    dpx = wur * (cx[r + 1, j + s] - ux) + wdl * (cx[r - 1, j - 1 + s] - ux)
-    dpy = wur * (cy[r + 1, j + s] - uy) + wdl * (cy[r - 1, j - 1 + s] - uy)
-    dqx = wul * (cx[r + 1, j - 1 + s] - ux) + wdr * (cx[r - 1, j + s] - ux)
-    dqy = wul * (cy[r + 1, j - 1 + s] - uy) + wdr * (cy[r - 1, j + s] - uy)
+    dpx = wur * (zx[r + 1, j + s] - vx) + wdl * (zx[r - 1, j - 1 + s] - vx)
+    dpy = wur * (zy[r + 1, j + s] - vy) + wdl * (zy[r - 1, j - 1 + s] - vy)
+    dqx = wul * (zx[r + 1, j - 1 + s] - vx) + wdr * (zx[r - 1, j + s] - vx)
+    dqy = wul * (zy[r + 1, j - 1 + s] - vy) + wdr * (zy[r - 1, j + s] - vy)
     gx = kn * hx + a * (dpx + dqx) + b * (dpy - dqy) + cf * fx
     gy = kt * hy + b * (dpx - dqx) + c * (dpy + dqy) + cf * fy
     damp = bb if damped else like(1, bb)
     px[r, j] = ux + (damp * (ux - px[r, j]) + gx)
     py[r, j] = uy + (damp * (uy - py[r, j]) + gy)
+
+
+@njit(cache=True, _nrt=False, fastmath={"contract"})
+def rate_field(cx, cy, px, py, zx, zy, g):
+    """z = u(t) + g (u(t) - u(t-dt)) over a whole block (HALO copies and ghost cells included), g = beta/dt:
+    the field whose bond forces are the elastic force plus the bonds' damping beta K (u' as
+    (u(t) - u(t-dt))/dt), so one stencil pass gives both (``model.damping``, form "bonds")."""
+    for r in range(cx.shape[0]):
+        ax, ay, bx, by, ox, oy = cx[r], cy[r], px[r], py[r], zx[r], zy[r]
+        for j in range(ax.shape[0]):
+            ox[j] = ax[j] + g * (ax[j] - bx[j])
+            oy[j] = ay[j] + g * (ay[j] - by[j])
