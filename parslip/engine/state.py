@@ -71,7 +71,7 @@ class State:
     def __init__(self, setup, layout, dtype=np.float64, event_capacity: int = 0):
         self.setup, self.layout = setup, layout
         self.dtype = dt = np.dtype(dtype)
-        lat, mat, sc = setup.lattice, setup.material, setup.scene
+        lat, mat = setup.lattice, setup.material
         bl, tl = layout.blocks
 
         # The bonds' damping takes the bond forces on a field z of its own (``loop.Levels``): whole blocks then.

@@ -11,6 +11,7 @@ the same layout.  Either way the file is identical for any rank count.
 """
 from __future__ import annotations
 
+import os
 import sys
 import time
 
@@ -20,7 +21,7 @@ import h5py
 import numpy as np
 
 from .. import hooks
-from ..version import __version__, git_commit  # noqa: F401  (git_commit: the provenance's commit)
+from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
 from .contract import (EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, STATUS,
