@@ -10,7 +10,8 @@ route 2, ``field_g``        the dynamic mode II singular field fitted to the int
                             function of the Born continuum (``mode2_compliance``);
 ``gamma_sites``             Gamma, the energy the front's breaks released per unit length of its path.
 
-``process_zone`` gives the Palmer-Rice length Lambda both routes' distances are counted in.
+``process_zone`` gives the Palmer-Rice length Lambda both routes' distances are counted in
+(``palmer_rice_length``).
 
 Route 1, from lattice bonds, not continuum fields.  The snapshot holds every node's position p(n) at a drive
 step n and its half-step velocity (p(n) - p(n-1))/dt, hence p(n-1) too, and its cells hold every bulk bond
@@ -122,7 +123,7 @@ def crack_field(x, y, v: float, K: float, kn: float, kt: float, rho: float = DEN
     return u, -v * du
 
 
-def process_zone(kx: float, kn: float, kt: float, a: float = 1.0) -> float:
+def palmer_rice_length(kx: float, kn: float, kt: float, a: float = 1.0) -> float:
     """Palmer-Rice process zone Lambda = (9 pi/16) M Gamma / tau_p^2, in a.
 
     Gamma / tau_p^2 = a / (2 k_x) for a bond that holds a linear shear traction k_x s / a up to its break
@@ -194,11 +195,188 @@ def field_g(K: float, v: float, kn: float, kt: float, rho: float = DENSITY) -> f
 
 
 # --- Gamma: what the breaks took ------------------------------------------------------------------------------
-def break_energy_from_traction(sxy, syy, kx, ky, delta0: float, delta_b: float, x0=0.0):
-    """A bond's stored energy at its break (m c^2) when only a frame before it is known: the break comes where
-    the bond's length reaches delta_b; its gap y = delta0 - f_y / k_y is taken from the frame's normal traction
-    (f_y = -syy a rho c^2, internal) and its shear stretch is then sqrt(delta_b^2 - y^2) - x0:
-    E = 1/2 k_x (sqrt(delta_b^2 - y^2) - x0)^2 + 1/2 k_y (y - delta0)^2.  sxy sets the stretch's sign only."""
-    y = delta0 + np.asarray(syy, float) * DENSITY / np.asarray(ky, float)
-    s = np.sqrt(np.maximum(delta_b ** 2 - y ** 2, 0.0)) * np.sign(-np.asarray(sxy, float)) - x0
-    return 0.5 * np.asarray(kx) * s ** 2 + 0.5 * np.asarray(ky) * (y - delta0) ** 2
+def break_energy(syy, kx, ky, delta0: float, delta_b: float, c_r: float = 1.0):
+    """A bond's stored energy at its break (m c^2, internal) when only a frame before the break is known, and
+    its rest offset x0 is 0 (``interface.reform_x0 = "zero"``, and every bond that never re-formed): the bond
+    breaks where its length reaches delta_b; its gap y = delta0 - f_y / k_y is read off the frame's normal
+    traction (f_y = -syy rho c_r^2 a on the top node, syy in rho c_r^2), its shear stretch is then
+    sqrt(delta_b^2 - y^2), and E = 1/2 k_x (delta_b^2 - y^2) + 1/2 k_y (y - delta0)^2.  The gap of the frame
+    is not the gap at the break step: an estimate, used when the events carry no energy."""
+    y = delta0 + np.asarray(syy, float) * DENSITY * c_r * c_r / np.asarray(ky, float)
+    return 0.5 * np.asarray(kx) * np.maximum(delta_b ** 2 - y ** 2, 0.0) + 0.5 * np.asarray(ky) * (y - delta0) ** 2
+
+
+# --- the measures on a run ------------------------------------------------------------------------------------
+def _material(run):
+    from ..model.physics import Material
+    s = run.scene
+    return Material.from_scene(s["material.nu"], s["material.model"], s["material.velocity_unit"],
+                               s["material.bottom_kn"], s["material.bottom_kt"], s.get("material.kn_spring", "along"))
+
+
+def process_zone(run) -> float:
+    """Lambda (a) of a run: ``palmer_rice_length`` with the block's k_n, k_t and the sites' median k_x."""
+    m = _material(run)
+    kx = float(np.median(run.interface["kx"])) if "kx" in run.interface else float(run.scene["interface.kx"])
+    return palmer_rice_length(kx, m.kn_top, m.kt_top)
+
+
+def steady_stretch(front, share: tuple = STEADY) -> dict:
+    """The front's steady stretch: the sites it broke between the fractions ``share`` of its path, their
+    indices into ``front.tip`` ("lo", "hi"), times "t0", "t1" (l/c_r), and the straight line fitted through
+    their arrivals, x_tip(t) = "x_at"(t) (l), of signed speed "V" (c_r)."""
+    tt, xx = np.asarray(front.tip["t"], float), np.asarray(front.tip["x"], float)
+    n = len(tt)
+    lo, hi = int(share[0] * n), max(int(share[1] * n), int(share[0] * n) + 2)
+    V, x0 = np.polyfit(tt[lo:hi], xx[lo:hi], 1)
+    return {"lo": lo, "hi": hi, "t0": float(tt[lo]), "t1": float(tt[hi - 1]), "V": float(V),
+            "x_at": lambda t: x0 + V * np.asarray(t, float)}
+
+
+def _refuse(run, what: str, value, accepted: str):
+    from ..errors import ConfigError
+    raise ConfigError(f"{what} = {value!r} in {run.path}: {accepted}")
+
+
+class _LatticeGeometry:
+    """A run's nodes (reference positions in a, block) and its bulk bonds (stiffness, reference vector), as
+    the snapshot cells list them; built once per run."""
+
+    def __init__(self, run, cells, interface):
+        from ..model.lattice import Lattice
+        s = run.scene
+        if s.get("lattice.substrate", "elastic") != "elastic":
+            _refuse(run, "lattice.substrate", s.get("lattice.substrate"), "route 1 needs an elastic substrate")
+        self.lat = Lattice(s["lattice.top_rows"], s["lattice.top_cols"], s["lattice.bottom_rows"],
+                           s["lattice.bottom_cols"], s["interface.delta0"], "elastic")
+        nodes = self.lat.nodes_in_columns(0, self.lat.ncols)
+        self.ref = np.stack([nodes["x"], nodes["y"]], axis=1)
+        self.block, self.col = nodes["block"], nodes["col"]
+        bulk = cells[interface == 0]
+        m = _material(run)
+        kn = np.where(self.block[bulk[:, 0]] == 1, m.kn_top, m.kn_bottom)
+        kt = np.where(self.block[bulk[:, 0]] == 1, m.kt_top, m.kt_bottom)
+        self.bulk = bulk
+        self.d0 = self.ref[bulk[:, 1]] - self.ref[bulk[:, 0]]
+        self.K = bulk_bond_stiffness(self.d0, kn, kt)
+        top, bot = self.lat.top, self.lat.bottom
+        self.y_interface = 0.5 * (top.y0 + (bot.rows - 1) * np.sqrt(3) / 2)
+        # The box must stay clear of the driven top row and the fixed bottom row, whose forces it cannot see.
+        self.y_free = (np.sqrt(3) / 2, top.y0 + (top.rows - 2) * np.sqrt(3) / 2)
+        self.x_free = (top.col0, top.col0 + top.cols - 1)
+
+
+def _bonds(run, geo, snap) -> dict:
+    """Every bond of a snapshot in ``contour_flux``'s form: the bulk bonds, and each intact interface bond
+    from its top node to its substrate node with K = diag(k_x, k_y), d0 = (-x0, -delta0), x0 = 0."""
+    cells, flag = snap["cells"], snap["interface"]
+    iface = cells[(flag == 1) & (cells[:, 0] != cells[:, 1])]
+    site = geo.col[iface[:, 0]] - geo.lat.top.col0
+    kx, ky = run.interface["kx"][site], run.interface["ky"][site]
+    Ki = np.zeros((len(iface), 2, 2))
+    Ki[:, 0, 0], Ki[:, 1, 1] = kx, ky
+    d0 = np.zeros((len(iface), 2))
+    d0[:, 1] = -float(run.scene["interface.delta0"])
+    return {"i": np.concatenate([geo.bulk[:, 0], iface[:, 0]]), "j": np.concatenate([geo.bulk[:, 1], iface[:, 1]]),
+            "K": np.concatenate([geo.K, Ki]), "d0": np.concatenate([geo.d0, d0])}
+
+
+def _check_route1(run):
+    s = run.scene
+    if s.get("interface.reform_x0", "zero") != "zero":
+        _refuse(run, "interface.reform_x0", s["interface.reform_x0"],
+                "route 1 reads interface bonds from positions, so it needs rest offsets 0 ('zero')")
+    if s.get("time.damping", "absolute") != "absolute":
+        _refuse(run, "time.damping", s["time.damping"], "route 1 subtracts 'absolute' damping only")
+
+
+def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
+    """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
+    square of half-side r Lambda about the tip for each r of ``radii``, the tip at the stretch's fitted line,
+    the box centred on the interface.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
+    "radii" (a)}; a snapshot whose largest box leaves the free part of either block is skipped."""
+    from ..io import contract
+    _check_route1(run)
+    lam, st = process_zone(run), steady_stretch(front)
+    c_r, dt, l = float(run.attrs["c_r"]), float(run.attrs["dt"]), float(run.attrs["l"])
+    zeta = float(run.scene.get("time.zeta", 0.0))
+    geo, rows = None, []
+    for k, t in enumerate(run.snapshot_times):
+        if not st["t0"] <= t <= st["t1"]:
+            continue
+        snap = contract.read_snapshot_arrays(run.path, k)
+        if geo is None:
+            geo = _LatticeGeometry(run, snap["cells"], snap["interface"])
+        x_tip = float(st["x_at"](t))
+        x_c, y_c, r_max = geo.lat.top.col0 + x_tip * l - 0.5, geo.y_interface, max(radii) * lam
+        if (x_c - r_max - 1 < geo.x_free[0] or x_c + r_max + 1 > geo.x_free[1]
+                or y_c - r_max < geo.y_free[0] or y_c + r_max > geo.y_free[1]):
+            continue
+        p, vel = snap["points"][:, :2], snap["velocity"][:, :2]
+        bonds = _bonds(run, geo, snap)
+        G = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (x_c, y_c, r * lam), st["V"] * c_r, zeta)["G"]
+             / c_r ** 2 for r in radii]
+        rows.append({"t": float(t), "x_tip": x_tip, "V": st["V"], "G": G, "radii": [r * lam for r in radii]})
+    return rows
+
+
+def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
+    """Route 2 on every interface frame inside the front's steady stretch: ``mode2_fit`` of /interface/sxy
+    over the sites xi = window[0] Lambda .. window[1] Lambda ahead of the tip (the stretch's fitted line), a
+    frame whose window leaves the contact skipped; G = ``field_g`` at the stretch's speed.  Rows {"t", "x_tip",
+    "V", "K_II" (rho c_r^2 a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}."""
+    lam, st, m = process_zone(run), steady_stretch(front), _material(run)
+    c_r, l = float(run.attrs["c_r"]), float(run.attrs["l"])
+    x, t, sxy = run.x, run.times, run.interface["sxy"]
+    d = 1.0 if st["V"] >= 0 else -1.0
+    want = int(np.count_nonzero((np.arange(1, len(x) + 1) >= window[0] * lam) & (np.arange(1, len(x) + 1)
+                                                                                  <= window[1] * lam)))
+    rows = []
+    for k in np.flatnonzero((t >= st["t0"]) & (t <= st["t1"])):
+        x_tip = float(st["x_at"](t[k]))
+        xi = d * (x - x_tip) * l
+        sel = (xi >= window[0] * lam) & (xi <= window[1] * lam)
+        if np.count_nonzero(sel) < want:
+            continue
+        K, tau0 = mode2_fit(xi[sel], sxy[k, sel])
+        G = field_g(K * DENSITY * c_r * c_r, abs(st["V"]) * c_r, m.kn_top, m.kt_top) / c_r ** 2
+        rows.append({"t": float(t[k]), "x_tip": x_tip, "V": st["V"], "K_II": K, "tau_0": tau0, "G": G})
+    return rows
+
+
+def gamma_run(run, front) -> dict:
+    """Gamma per site on the front's steady stretch (m c_r^2 / a: one site per spacing a): the stored energy of
+    the bond at the break by which the front's tip reached the site, from the event's ``energy`` when the run
+    recorded it, else ``break_energy`` from the last frame before the break.  {"x" (l), "Gamma", "source"}."""
+    st = steady_stretch(front)
+    ev, c_r, iface = run.events, float(run.attrs["c_r"]), run.interface
+    sites = np.clip(np.rint(np.asarray(front.tip["x"]) * len(run.x) - 0.5).astype(int), 0, len(run.x) - 1)
+    sl = slice(st["lo"], st["hi"])
+    if ev is not None and "energy" in ev:
+        key = {(int(s), int(k)): e for s, k, e, kind in zip(ev["site"], ev["step"], ev["energy"], ev["kind"])
+               if kind == 1}
+        g = np.array([key.get((int(s), int(k)), np.nan) for s, k in zip(sites[sl], front.tip["step"][sl])])
+        return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "events"}
+    frames = np.maximum(np.asarray(front.tip["frame"])[sl] - 1, 0)
+    s = sites[sl]
+    delta_b = iface["delta_b"][s] if "delta_b" in iface else float(run.scene["interface.delta_b"])
+    g = break_energy(iface["syy"][frames, s], iface["kx"][s], iface["ky"][s], float(run.scene["interface.delta0"]),
+                     delta_b, c_r) / c_r ** 2
+    return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "frames"}
+
+
+def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_WINDOW) -> dict:
+    """The per-front scalars, means over the front's steady stretch: G_contour_inner, G_contour_outer (route 1
+    at the two radii), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
+    snapshots and frames each mean holds (NaN where none)."""
+    c = contour_g_run(run, front, radii)
+    f = field_g_run(run, front, window)
+    g = gamma_run(run, front)
+
+    def mean(a):
+        a = np.asarray(a, float)
+        a = a[np.isfinite(a)]
+        return float(a.mean()) if len(a) else math.nan
+    return {"G_contour_inner": mean([r["G"][0] for r in c]), "G_contour_outer": mean([r["G"][-1] for r in c]),
+            "G_field": mean([r["G"] for r in f]), "Gamma": mean(g["Gamma"]), "Gamma_source": g["source"],
+            "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f)}
