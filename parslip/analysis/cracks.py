@@ -294,7 +294,7 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
     square of half-side r Lambda about the tip for each r of ``radii``, the tip at the stretch's fitted line,
     the box centred on the interface.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
-    "radii" (a)}; a snapshot whose largest box leaves the free part of either block is skipped."""
+    "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}; a snapshot whose largest box leaves the free part of either block is skipped."""
     from ..io import contract
     _check_route1(run)
     lam, st = process_zone(run), steady_stretch(front)
@@ -314,9 +314,13 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
             continue
         p, vel = snap["points"][:, :2], snap["velocity"][:, :2]
         bonds = _bonds(run, geo, snap)
-        G = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (x_c, y_c, r * lam), st["V"] * c_r, zeta)["G"]
-             / c_r ** 2 for r in radii]
-        rows.append({"t": float(t), "x_tip": x_tip, "V": st["V"], "G": G, "radii": [r * lam for r in radii]})
+        near = np.max(np.abs(geo.ref - (x_c, y_c)), axis=1) <= r_max + 2       # only the bonds the boxes reach
+        keep = near[bonds["i"]] | near[bonds["j"]]
+        bonds = {name: a[keep] for name, a in bonds.items()}
+        parts = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (x_c, y_c, r * lam), st["V"] * c_r, zeta)
+                 for r in radii]
+        rows.append({"t": float(t), "x_tip": x_tip, "V": st["V"], "G": [q["G"] / c_r ** 2 for q in parts],
+                     "radii": [r * lam for r in radii], "parts": parts})
     return rows
 
 
