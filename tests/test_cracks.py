@@ -155,3 +155,25 @@ def test_gamma_from_a_drawn_frame():
     g = cracks.gamma_run(run, f)
     want = (0.5 * kx * (db ** 2 - y ** 2) + 0.5 * ky * (y - d0) ** 2) / c_r ** 2
     assert g["source"] == "frames" and np.allclose(g["Gamma"], want[4:16])
+
+
+def test_what_the_interface_takes_inside_each_contour():
+    """A front one site per 0.002 l/c_r along 500 sites; each site breaks at the tip (0.01 m c_r^2), re-forms 10
+    sites behind it (0.004 put back) and breaks again 40 sites behind it (0.005): inside the inner contour
+    (1.5 Lambda, about 25 a) the interface takes 0.006 per a of advance, inside the outer (3 Lambda) 0.011."""
+    n, dt0 = 500, 0.002
+    s = np.arange(n)
+    x = (s + 0.5) / n
+    f = SimpleNamespace(tip={"x": x, "t": s * dt0, "step": s, "frame": s})
+    site = np.concatenate([s, s, s])
+    time = np.concatenate([s * dt0, (s + 10) * dt0, (s + 40) * dt0])
+    kind = np.concatenate([np.ones(n), 2 * np.ones(n), np.ones(n)]).astype(np.uint8)
+    energy = np.concatenate([np.full(n, 0.01), np.full(n, 0.004), np.full(n, 0.005)])
+    scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
+             "material.bottom_kn": 10.0, "material.bottom_kt": 0.0}
+    run = SimpleNamespace(events={"site": site, "time": time, "kind": kind, "energy": energy},
+                          attrs={"l": float(n)}, interface={"kx": np.full(n, 0.1)}, x=x, scene=scene)
+    lam = cracks.process_zone(run)
+    assert 15 < lam < 18                                       # "about 15 a at k_x = 0.1"
+    inner, outer = cracks.interface_take(run, f)
+    assert inner == pytest.approx(0.006, rel=0.02) and outer == pytest.approx(0.011, rel=0.02)

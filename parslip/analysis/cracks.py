@@ -369,13 +369,33 @@ def gamma_run(run, front) -> dict:
     return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "frames"}
 
 
+def interface_take(run, front, radii: tuple = CONTOUR_RADII) -> list[float]:
+    """What the interface takes inside each contour of route 1, per unit advance (m c_r^2 / a), from the events'
+    stored energies: over the steady stretch, the energy of every break minus that of every re-formation whose
+    site lay within r Lambda of the tip (the stretch's fitted line) at its step, over V (t1 - t0).  For a
+    steady front this is route 1's G at that radius by energy conservation, read off the bonds instead of the
+    fields: a check of route 1 that shares none of its data.  NaN without /interface/events/energy."""
+    ev = run.events
+    if ev is None or "energy" not in ev:
+        return [math.nan for _ in radii]
+    lam, st, l = process_zone(run), steady_stretch(front), float(run.attrs["l"])
+    t = np.asarray(ev["time"], float)
+    sel = (t >= st["t0"]) & (t <= st["t1"])
+    dist = np.abs((run.x[ev["site"][sel]] - st["x_at"](t[sel])) * l)
+    sign = np.where(ev["kind"][sel] == 1, 1.0, -1.0)
+    e = sign * np.asarray(ev["energy"], float)[sel]
+    advance = abs(st["V"]) * (st["t1"] - st["t0"]) * l
+    return [float(e[dist <= r * lam].sum() / advance) for r in radii]
+
+
 def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_WINDOW) -> dict:
     """The per-front scalars, means over the front's steady stretch: G_contour_inner, G_contour_outer (route 1
     at the two radii), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
-    snapshots and frames each mean holds (NaN where none)."""
+    snapshots and frames each mean holds (NaN where none); take_inner, take_outer (``interface_take``)."""
     c = contour_g_run(run, front, radii)
     f = field_g_run(run, front, window)
     g = gamma_run(run, front)
+    take = interface_take(run, front, radii)
 
     def mean(a):
         a = np.asarray(a, float)
@@ -383,4 +403,5 @@ def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_W
         return float(a.mean()) if len(a) else math.nan
     return {"G_contour_inner": mean([r["G"][0] for r in c]), "G_contour_outer": mean([r["G"][-1] for r in c]),
             "G_field": mean([r["G"] for r in f]), "Gamma": mean(g["Gamma"]), "Gamma_source": g["source"],
-            "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f)}
+            "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f),
+            "take_inner": take[0], "take_outer": take[-1]}
