@@ -9,7 +9,9 @@ import pytest
 from helpers import SMALL, reference, require, run_cli, scene, simulation, small_toml, datasets
 from parslip.engine.kernels import interface as ik
 from parslip.model.interface import PARTNER
-from parslip.model.lattice import TOP
+from parslip.errors import NonFiniteError
+from parslip.model.lattice import BOTTOM, TOP
+from parslip.scene.memory import CHECK_EVERY
 from parslip.scene.derive import derive
 
 
@@ -52,6 +54,11 @@ def test_whole_run_matches_the_reference_run():
 # so a free node may re-bond to a substrate site up to 2.45 a away in x: two columns off.
 WIDE = {**SMALL, "interface.delta0": 2.5, "interface.delta_b": 2.8, "load.FN": 14.4, "drive.v0": 0.05,
         "output.snapshots": 0}
+# A substrate of the block's own material, tall and loaded so that its interface sites follow the block by
+# about 2 a (a substrate 35 times stiffer moves a few hundredths of that): re-bonding must find them there.
+SOFT_PAIR = {**SMALL, "lattice.top_rows": 8, "lattice.bottom_rows": 24, "material.bottom_kn": 2.81154,
+             "material.bottom_kt": 0.133883, "drive.mode": "shear", "drive.duration": 12.0, "load.FN": 6.0,
+             "interface.ky": 1.0, "interface.kx": 0.3, "output.snapshots": 0}
 
 
 def _nearest_free(sim, j, taken):
@@ -75,17 +82,22 @@ def _nearest_free(sim, j, taken):
     return who
 
 
-def test_wide_gap_rebonds_to_the_nearest_free_site_even_two_columns_away():
-    """The re-bonding window follows delta0: each bond formed is the brute-force nearest free site of
-    the whole substrate row, and some are two or more columns from the node's nearest column."""
-    sim = simulation(WIDE)
+@pytest.mark.parametrize("case", ["wide gap", "drifted substrate"])
+def test_rebonds_to_the_nearest_free_site_even_two_columns_away(case):
+    """Each bond formed is the brute-force nearest free site of the whole substrate row, and some are two
+    or more columns from the node's nearest column: because delta0 = 2.5 reaches that far (a free site
+    looks R + 1/2 = 3 a either way), or because the substrate's sites have drifted about 2 a from their
+    columns (a soft substrate)."""
+    sim = simulation(WIDE if case == "wide gap" else SOFT_PAIR)
     st = sim.setup
-    assert st.reach.window == 3
+    assert st.reach.link == (3 if case == "wide gap" else 1)
     sim.run(until=st.n_drive_start)
     far = formed = 0
+    drift = 0.0
     g = sim.state.iface.geom
     for _ in range(st.n_drive):
         s = sim.state
+        drift = max(drift, float(np.abs(s.level(sim.n)[0][g.brow, g.bown0:g.bown1]).max()))
         partner_before = s.iface.bonds[PARTNER].astype(np.int64)
         _, _, tx, _ = s.level(sim.n)
         ux = tx[1].copy()
@@ -109,6 +121,48 @@ def test_wide_gap_rebonds_to_the_nearest_free_site_even_two_columns_away():
             far += abs(int(s.iface.bonds[PARTNER, j]) - round(j + g.tbase + ux[j])) >= 2
         sim.n += 1
     assert formed > 10 and far > 0, (formed, far)
+    assert drift > (1.5 if case == "drifted substrate" else 0.0), drift
+
+
+def test_a_folded_substrate_row_stops_the_run_with_one_line():
+    """Re-bonding walks the substrate's interface row in x order, so a site that passes its left neighbour
+    stops the run (exit 3) at the next check, naming the step and the column.  A substrate soft enough
+    (k_n = 0.02) that the fold does not first run away."""
+    sim = simulation(SMALL, **{"material.bottom_kn": 0.02, "material.bottom_kt": 0.001})
+    n = CHECK_EVERY - 1                       # the next step ends on a check
+    sim.run(until=n)
+    nd = sim.state.nodes()
+    u = sim.u
+    site = (nd["block"] == BOTTOM) & (nd["row"] == sim.setup.lattice.bottom.rows - 1) & (nd["col"] == 20)
+    u[site, 0] -= 1.3                         # 0.3 a to the left of column 19's site
+    sim.set_u(u)
+    with pytest.raises(NonFiniteError, match=rf"interface row folded at step {n + 1} .* column 20 stood -0\.[23]"):
+        sim.run(until=n + 1)
+
+def test_drifted_substrate_runs_the_same_on_1_and_3_ranks_and_through_a_restart(tmp_path):
+    """SOFT_PAIR through the command line: 3 ranks write the 1-rank run bit for bit, and so does the run
+    stopped halfway (2 ranks, its end checkpoint) and continued to the end on 3 ranks."""
+    sc = tmp_path / "s.toml"
+    sc.write_text(small_toml(**{**SOFT_PAIR, "checkpoint.every": 3.0}))
+    outs = {}
+    for n in (1, 3):
+        outs[n] = tmp_path / f"o{n}.vtkhdf"
+        p = run_cli(n, "run", sc, "--out", outs[n], "--no-png", "--quiet")
+        assert p.returncode == 0, p.stderr
+    ref, _ = datasets(outs[1])
+    got, _ = datasets(outs[3])
+    assert ref.keys() == got.keys() and all(ref[k].tobytes() == got[k].tobytes() for k in ref)
+    assert len(ref["interface/events/kind"]) > 20
+    out = tmp_path / "r.vtkhdf"
+    p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=6.0")
+    assert p.returncode == 0, p.stderr
+    p = run_cli(3, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", str(out) + ".ckpt.h5")
+    assert p.returncode == 0, p.stderr
+    got, attrs = datasets(out)
+    assert attrs["status"] == "complete"
+    for name in ref:
+        if name.startswith("interface/"):
+            assert got[name].tobytes() == ref[name].tobytes(), name
 
 
 def test_wide_gap_is_bitwise_identical_on_1_and_3_ranks(tmp_path):

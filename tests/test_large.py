@@ -63,10 +63,10 @@ def test_l500_push_on_64_ranks_every_halo_segment_comes_from_its_owner(l500_on_6
     lat = st.lattice
     bounds = lays[0].bounds
     assert len(bounds) == 65 and bounds[0] == 0 and bounds[-1] == lat.ncols and np.all(np.diff(bounds) >= 1)
-    # The slip reach of the scene: v0 x duration = 1e-3 c_r x 100 l/c_r = 0.1 l = 50 a, plus 2 a; link = 2 a
-    # (delta_b = 0.7 and a re-bonding window of 1 column, each with 0.5 a of substrate drift).
+    # The slip reach of the scene: v0 x duration = 1e-3 c_r x 100 l/c_r = 0.1 l = 50 a, plus 2 a; link = 1 a
+    # (delta_b = 0.7, and a free site looks for substrate sites within delta0 + 1/2 = 1 a in x).
     assert st.slip_reach == pytest.approx(52.0)
-    top_halo, bottom_halo = 52 + 5 * 2 + 1, 52 + 4 * 2 + 1
+    top_halo, bottom_halo = 52 + 5 * 1 + 1, 52 + 4 * 1 + 1
     widest_slab = int(np.diff(bounds[(bounds >= lat.top.col0) & (bounds <= lat.top.col0 + lat.top.cols)]).max())
     assert top_halo > 3 * widest_slab              # under the contact a halo spans more than three slabs
     for lay in lays:

@@ -47,7 +47,7 @@ def test_rebond_facing_or_nearest(rule, expect):
     'facing' waits for its own."""
     sim = simulation(SMALL, **{"interface.rebond": rule, "interface.rebond_within": 1.2, "interface.delta_b": 1.5})
     s = sim.state
-    assert sim.setup.reach.window == 2
+    assert sim.setup.reach.link == 2
     j = s.iface.geom.town0 + 5
     q_j, q_next = int(s.iface.bonds[PARTNER, j]), int(s.iface.bonds[PARTNER, j + 1])
     s.iface.bonds[PARTNER, j] = -1

@@ -4,7 +4,7 @@ Responsible for the order of one step and the load phases (ramp F_N, settle
 with damping, drive), and for stopping where Python must act: the end of the
 requested steps, a full buffer of interface frames, or a problem (a state
 that is not finite or grows without bound, a bond out of the halo's reach, a
-substrate site that drifted further than the re-bonding window assumes).
+substrate interface row that folded: a site passed its neighbour in x).
 
 One step n -> n+1, at positions u(n) (level n % 2; level (n+1) % 2 holds
 u(n-1) and receives u(n+1)):
@@ -100,7 +100,7 @@ C_BASE, C_COUNT, C_LAST = range(3)
 
 # Flags: [status bits, step, block, row, global column, value*1e6 as int, events held].  The MAX over the
 # ranks of L_EVENTS is the fullest event record: every rank learns it at the same agreement.
-FLAG_NONFINITE, FLAG_RUNAWAY, FLAG_REACH, FLAG_DRIFT, FLAG_MPI = 1, 2, 4, 8, 16
+FLAG_NONFINITE, FLAG_RUNAWAY, FLAG_REACH, FLAG_FOLD, FLAG_MPI = 1, 2, 4, 8, 16
 (L_BITS, L_STEP, L_BLOCK, L_ROW, L_COL, L_VALUE, L_EVENTS) = range(7)
 L_SIZE = 8
 
@@ -241,7 +241,8 @@ def _row_moves(cx, cy, px, py, r, j0, n):
 @njit(cache=True, _nrt=False)
 def _check(n, tasks, cur, nxt, prm, iface, flags):
     """Owned nodes of u(n+1): finite, and moved less than ``prm.jump`` a in the step (else: runaway);
-    the substrate's owned interface sites within ``drift`` of their columns.
+    the substrate's owned interface sites each to the right of its left neighbour (the re-bonding search
+    walks the row in x order; ``kernels.interface._span``).
 
     A row whose summed squared moves stays below jump^2 cannot hold a runaway node;
     only other rows are searched node by node.
@@ -271,11 +272,11 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
                 _flag(flags, FLAG_RUNAWAY, n + 1, b, r, j + base, d)
                 return
     if prm.has_iface and not prm.rigid:
-        drift = iface.consts.drift
         br = prm.brow
-        for i in range(g.bown0, g.bown1):
-            if not abs(nxt.bx[br, i]) <= drift:
-                _flag(flags, FLAG_DRIFT, n + 1, 0, br, i + g.bbase, float(nxt.bx[br, i]))
+        for i in range(max(g.bown0, g.blo + 1), g.bown1):
+            gap = 1.0 + (float(nxt.bx[br, i]) - float(nxt.bx[br, i - 1]))
+            if not gap > 0.0:
+                _flag(flags, FLAG_FOLD, n + 1, 0, br, i + g.bbase, gap)
                 return
 
 

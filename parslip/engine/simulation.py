@@ -342,14 +342,16 @@ class Simulation:
             what = (f"the bond or re-bonding window of the interface site at column {col} reached past the substrate "
                     f"sites its rank holds" if col >= 0 else "the halo no longer covered the interface's reach")
             raise SlipReachError(
-                f"interface slip reached {slip:.3g} a at step {step} (t = {t:.4g} l/c_r): {what}, beyond "
+                f"interface slip reached {slip:.3g} a (the block relative to the substrate) at step {step} "
+                f"(t = {t:.4g} l/c_r): {what}, beyond "
                 f"interface.slip_reach = {st.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
                 f"interface.slip_reach={max(2 * slip, st.slip_reach + 2):.3g}")
-        if bits & L.FLAG_DRIFT:
+        if bits & L.FLAG_FOLD:
             raise NonFiniteError(
-                f"the substrate's interface site at column {int(first[L.L_COL])} moved "
-                f"{first[L.L_VALUE] / 1e6:.3g} a by step {step}, more than the {st.reach.drift} a the re-bonding "
-                f"window assumes; the substrate is too soft for this model (raise material.bottom_kn)")
+                f"the substrate's interface row folded at step {step} (t = {t:.4g} l/c_r): its site at column "
+                f"{int(first[L.L_COL])} stood {first[L.L_VALUE] / 1e6:.3g} a to the right of its left neighbour, and "
+                f"re-bonding needs the row in x order; the substrate is too soft for this load (raise "
+                f"material.bottom_kn or lower load.FN)")
         raise NonFiniteError(f"MPI error {first[L.L_VALUE] / 1e6:.0f} in the halo exchange at step {step}")
 
     def _describe_node(self, f, t):

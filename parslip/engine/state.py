@@ -101,12 +101,12 @@ class State:
                 bown0 = bown1 = blo
             town0, town1 = tl.j(tl.owned[0])
             geom = ik.Geometry(tbase=tl.base, tlo=lo, thi=hi, town0=town0, town1=town1, bbase=bl.base, blo=blo,
-                               bhi=bhi, bown0=bown0, bown1=bown1, brow=bl.prow(br), window=reach.window,
+                               bhi=bhi, bown0=bown0, bown1=bown1, brow=bl.prow(br),
                                tfirst=tl.span[0], tlast=tl.span[1] - 1, bcols=lat.bottom.cols, rigid=int(lat.rigid),
                                tcover=reach.top_cover, bcover=reach.bottom_cover)
         else:
             geom = ik.Geometry(*([0] * len(ik.Geometry._fields)))
-        consts = ik.Constants(drift=dt.type(reach.drift), inv_l=dt.type(1.0 / setup.l),
+        consts = ik.Constants(inv_l=dt.type(1.0 / setup.l),
                               traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)))
         geom = ik.Geometry(*(int(v) for v in geom))
         self.iface = ik.Iface(bonds=bonds, rules=law.rules(dt, setup), claim=np.zeros(wt, np.int64),
@@ -213,10 +213,18 @@ class State:
             self.iface.bonds[r, s] = rows[name]
 
     def max_top_slip(self, n: int) -> float:
-        """max |u_x| of the OWNED top interface sites at step n (a)."""
-        _, _, tx, _ = self.level(n)
+        """max |u_x,top - u_x,bottom| over the OWNED top interface sites at step n (a): how far the block's
+        interface has slid relative to the substrate's sites of the same columns (the halo serves that)."""
+        bx, _, tx, _ = self.level(n)
         s = self.owned_sites()
-        return float(np.max(np.abs(tx[PAD, s]))) if s.stop > s.start and self.setup.lattice.has_interface else 0.0
+        if s.stop <= s.start or not self.setup.lattice.has_interface:
+            return 0.0
+        g = self.iface.geom
+        cols = np.arange(s.start, s.stop) + g.tbase - g.bbase      # the same columns in the substrate's arrays
+        held = (cols >= g.blo) & (cols < g.bhi)
+        under = np.zeros(len(cols))
+        under[held] = bx[g.brow, cols[held]]
+        return float(np.max(np.abs(tx[PAD, s].astype(float) - under)))
 
     # ------------------------------------------------------------- fields ----
     def potential_energy(self, n: int, load: float) -> float:

@@ -44,9 +44,9 @@ OWNED, HALO = "owned", "halo"
 BULK_REACH = 1
 PAD = 1                 # ghost rows and columns around each block's arrays
 
-# How far a substrate interface site may drift from its reference column (a).
-# The re-bonding window and the halo widths assume it; the loop checks it.
-BOTTOM_DRIFT = 0.5
+# How much further than the re-bonding length R a free site looks for substrate sites (a): a margin
+# that keeps rounding out of the search (``kernels.interface._span``).
+SEARCH_MARGIN = 0.5
 
 # Row kinds of the schedule (the compiled loop has one loop per kind).
 FULL, NO_UP, NO_DOWN, MASKED = 0, 1, 2, 3
@@ -74,27 +74,27 @@ SITE_COST = 12.0
 class Reach:
     """Halo widths in columns, from the interface geometry and the slip it must serve.
 
-    window = floor(delta0 + drift + 1/2): a free node at x re-bonds to a substrate
-        site q with |q + u_q - x| <= delta0, so |q - round(x)| <= window when
-        the substrate site has drifted at most ``drift`` from its column.
-    link = ceil(max(delta_b, window + 1/2) + drift): how far, in a, one top-bottom
-        interaction reaches (a bond breaks at length delta_b; a claim reaches
-        window + 1/2 from the node).
+    Every distance an interface update depends on is a distance in current x, wherever the substrate's
+    sites have drifted from their columns:
+    link = ceil(max(delta_b, R + SEARCH_MARGIN)): how far, in a, one top-bottom interaction reaches (a
+        bond breaks at length delta_b; a free site looks at the substrate sites within R + SEARCH_MARGIN
+        of it, R the re-bonding length).
     An exact bond update of a node needs the block's interface nodes within 4
     links and the substrate sites within 3 links of it; a rank needs exact
     updates for its own nodes and for the block's nodes bonded to its own
-    substrate sites (one more link).  Hence, with U the slip reach,
+    substrate sites (one more link).  The columns stored must hold these in
+    current x, so each halo adds the slip reach U, which bounds how far the
+    block's interface slides relative to the substrate's (not how far either
+    moves: a substrate that follows the block needs no wider halo):
         top_site    = ceil(U) + 5 link + 1   (the block's interface row)
         bottom_site = ceil(U) + 4 link + 1   (the substrate's interface row).
     The loop checks every step that the halo covers these distances in the
-    current (slid) positions, and stops the run if not.
+    current (slid) positions of both rows, and stops the run if not.
     """
     slip: float
-    window: int
     link: int
     top_site: int
     bottom_site: int
-    drift: float = BOTTOM_DRIFT
 
     @property
     def top_cover(self) -> int:
@@ -106,12 +106,10 @@ class Reach:
         return 4 * self.link
 
 
-def interface_reach(delta0: float, delta_b: float, slip: float, drift: float = BOTTOM_DRIFT) -> Reach:
-    window = int(math.floor(delta0 + drift + 0.5))
-    link = int(math.ceil(max(delta_b, window + 0.5) + drift))
+def interface_reach(rebond_length: float, delta_b: float, slip: float) -> Reach:
+    link = int(math.ceil(max(delta_b, rebond_length + SEARCH_MARGIN)))
     u = int(math.ceil(slip))
-    return Reach(slip=slip, window=window, link=link, top_site=u + 5 * link + 1, bottom_site=u + 4 * link + 1,
-                 drift=drift)
+    return Reach(slip=slip, link=link, top_site=u + 5 * link + 1, bottom_site=u + 4 * link + 1)
 
 
 def column_cost(lattice: Lattice) -> np.ndarray:

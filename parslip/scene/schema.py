@@ -107,7 +107,8 @@ SCHEMA: dict[str, Key] = {
                                "a free site re-bonds only after claiming the same substrate site (the nearest "
                                "free one within reach) for this long; the clock restarts when the claim changes"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
-                                "largest interface slip the MPI halo must reach across"),
+                                "largest slip of the block's interface relative to the substrate's that the MPI "
+                                "halo must reach across"),
     # load and drive -------------------------------------------------------------
     "load.FN": Key(1.0, float, "m c^2/a", ">= 0", _range(0.0),
                    "total normal load, spread evenly over the top row SR"),

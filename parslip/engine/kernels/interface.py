@@ -12,9 +12,11 @@ and the opposite force on the bottom node.  Each step, at positions u(t):
 
 1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b;
 2. each free top site claims the nearest free bottom site within the law's
-   re-bonding length (delta0 unless set; ties: lower bottom index), looking
-   at the substrate columns within ``window`` of its nearest one (the rule
-   ``_search_width``: REBOND_FACING looks at the nearest column only);
+   re-bonding length R (delta0 unless set; ties: lower bottom index), among
+   the substrate sites whose current x lies within R + 1/2 (SEARCH_MARGIN) of its own
+   (``_span``: found from where the substrate's sites are now, wherever
+   they have drifted from their columns; REBOND_FACING takes only the one
+   nearest in x);
 3. claims are granted in increasing top-site order, so when two free top
    sites reach the same bottom site the lower global index wins and the
    other waits a step; a re-formed bond takes its rest offset by the rule
@@ -27,7 +29,10 @@ Every rank runs this over all its interface sites, OWNED and HALO, in global
 order: HALO copies arrive with their bond state each step, so a rank's own
 sites, and the halo sites bonded to its own substrate sites, come out exact
 as long as the halo covers the distances the update depends on
-(``layout.Reach``).  ``coverage`` checks that in the current positions.
+(``layout.Reach``), measured in current positions: ``coverage`` checks that
+every step.  The substrate's interface row must stay in x order (no site
+passes its neighbour), which the loop checks; nothing else bounds how far
+its sites drift from their columns.
 """
 from collections import namedtuple
 
@@ -36,6 +41,7 @@ from numba import njit
 
 from ...model.interface import (CAND, CLOCK, DELTA_B, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER, REBOND_FACING,
                                 REFORM_ZERO, X0)
+from ...parallel.layout import SEARCH_MARGIN
 from .floats import like
 
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).
@@ -49,15 +55,13 @@ BREAK, FORM = 1, 2
 #   town0, town1     the block's OWNED interface sites
 #   blo, bhi         the substrate's interface sites stored here; bown0, bown1 the OWNED ones
 #   brow             array row of the substrate's interface row
-#   window           substrate columns searched each side of the nearest one when re-bonding
 #   tfirst, tlast    global columns of the block's first and last interface site
 #   bcols            substrate columns in all; rigid: 1 for a rigid substrate
 #   tcover, bcover   reach (a) the halo must cover beyond this rank's interest (``layout.Reach``)
-Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow window tfirst tlast "
+Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow tfirst tlast "
                                   "bcols rigid tcover bcover")
-# Constants of the rank's interface record, in the state's float type: drift (a) a substrate site may move
-# from its column; inv_l = 1/l; traction = 1/(a rho c_r^2).
-Constants = namedtuple("Constants", "drift inv_l traction")
+# Constants of the rank's interface record, in the state's float type: inv_l = 1/l; traction = 1/(a rho c_r^2).
+Constants = namedtuple("Constants", "inv_l traction")
 # The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
 # the substrate's (bottom sites): bonds, the per-site bond state [row, site] with the rows of
 # ``model.interface.BOND_ROWS`` (partner: global substrate column, -1 broken; x0: rest offset; the site's
@@ -85,13 +89,6 @@ def _gap(g, q, tx, ty, bx, by, j, i, d0):
 
 
 # --- The law's rules, one inlined function each, chosen by the law's codes -----------------------------
-
-@njit(cache=True, inline="always", _nrt=False)
-def _search_width(rebond, window):
-    """Substrate columns searched each side of a free site's nearest one: REBOND_FACING looks at that one
-    only, REBOND_NEAREST at ``window`` each side."""
-    return 0 if rebond == REBOND_FACING else window
-
 
 @njit(cache=True, inline="always", _nrt=False)
 def _rest_offset(reform, dx, zero):
@@ -202,28 +199,65 @@ def _breaks(n, tx, ty, bx, by, it, zero):
     return nfree
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def _dx(gl, q, txj, bx, bbase, d0):
+    """x_ij of top site ``gl`` (x-displacement ``txj``) and substrate column q, as ``_gap`` computes it."""
+    return like(gl - q, d0) + (txj - bx[q - bbase])
+
+
+@njit(cache=True, _nrt=False)
+def _span(gl, txj, bx, g, r, d0):
+    """The substrate columns [lo, hi] whose sites are within ``r`` in x of top site ``gl`` now
+    (|x_ij| <= r), and whether the walk met the end of this rank's copies where the row goes on.
+
+    Starts at the column the top site is nearest to, moved by the drift of the substrate site found
+    there, and walks: the substrate's interface row is in x order (the loop checks it), so x_ij falls
+    with q and the sites within r are one run of columns.  None within r: a one-column span whose site
+    is beyond r (the caller's distance test rejects it); no substrate copies at all: an empty span."""
+    bbase = g.bbase
+    qmin = max(g.blo + bbase, 0)
+    qmax = min(g.bhi + bbase, g.bcols) - 1
+    if qmax < qmin:
+        return qmin, qmin - 1, False
+    q = min(max(np.int64(np.floor(like(gl, d0) + txj + 0.5)), qmin), qmax)
+    q = min(max(q - np.int64(np.floor(bx[q - bbase] + 0.5)), qmin), qmax)
+    while q < qmax and _dx(gl, q, txj, bx, bbase, d0) > r:
+        q += 1
+    while q > qmin and _dx(gl, q, txj, bx, bbase, d0) < -r:
+        q -= 1
+    lo = hi = q
+    while lo > qmin and _dx(gl, lo - 1, txj, bx, bbase, d0) <= r:
+        lo -= 1
+    while hi < qmax and _dx(gl, hi + 1, txj, bx, bbase, d0) >= -r:
+        hi += 1
+    return lo, hi, (lo == qmin and qmin > 0) or (hi == qmax and qmax < g.bcols - 1)
+
+
 @njit(cache=True, _nrt=False)
 def _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero):
-    """2. Each free site's claim: the nearest untaken substrate site within the re-bond length, if the
-    healing rule lets it; kept with its site in its slot m of ``claim`` (site and claim in one integer)."""
+    """2. Each free site's claim: the nearest untaken substrate site within the re-bond length R (REBOND_FACING:
+    only the one nearest in x), if the healing rule lets it; kept with its site in its slot m of ``claim``
+    (site and claim in one integer).  The sites are looked for within R + SEARCH_MARGIN in x (``_span``)."""
     g, p, bonds, claim, reach = it.geom, it.rules, it.bonds, it.claim, it.reach
     tbase, bbase, thi, d0 = g.tbase, g.bbase, g.thi, p.delta0
     d02 = p.rebond_length * p.rebond_length
-    w = _search_width(p.rebond, g.window)
+    r = p.rebond_length + like(SEARCH_MARGIN, d0)
     for m in range(nfree):
         j = claim[m]
         gl = j + tbase
-        qc = np.int64(np.floor(like(gl, d0) + tx[j] + 0.5))    # nearest substrate column
+        lo, hi, cut = _span(gl, tx[j], bx, g, r, d0)
+        if cut and g.town0 <= j < g.town1 and reach[0] < 0:
+            reach[0] = gl
+        if p.rebond == REBOND_FACING and hi > lo:
+            near = lo
+            for q in range(lo + 1, hi + 1):
+                if abs(_dx(gl, q, tx[j], bx, bbase, d0)) < abs(_dx(gl, near, tx[j], bx, bbase, d0)):
+                    near = q
+            lo = hi = near
         best = np.inf
         got = -1
-        for q in range(qc - w, qc + w + 1):
-            if q < 0 or q >= g.bcols:
-                continue
+        for q in range(lo, hi + 1):
             i = q - bbase
-            if i < g.blo or i >= g.bhi:
-                if g.town0 <= j < g.town1 and reach[0] < 0:
-                    reach[0] = gl
-                continue
             if it.taken[i]:
                 continue
             dx, dy = _gap(gl, q, tx, ty, bx, by, j, i, d0)
@@ -282,9 +316,9 @@ def _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, 
 def coverage(tx, bx, g):
     """True when this rank's interface copies reach far enough in the current positions (``layout.Reach``).
 
-    The region of interest is this rank's own substrate sites and the current x of its own top sites;
+    The region of interest is the current x of this rank's own substrate sites and of its own top sites;
     the block's interface row must be stored over it plus ``top_cover`` a, and the substrate's over it
-    plus ``bottom_cover`` a, except where a row ends.  Top sites stay in x order along the row.
+    plus ``bottom_cover`` a, both in current x, except where a row ends.  Both rows stay in x order.
     """
     tbase, tlo, thi, town0, town1 = g.tbase, g.tlo, g.thi, g.town0, g.town1
     bbase, blo, bhi, bown0, bown1 = g.bbase, g.blo, g.bhi, g.bown0, g.bown1
@@ -294,7 +328,7 @@ def coverage(tx, bx, g):
     lo = 0.0
     hi = 0.0
     if bown1 > bown0:
-        lo, hi, have = float(bown0 + bbase), float(bown1 - 1 + bbase), True
+        lo, hi, have = bown0 + bbase + float(bx[bown0]), bown1 - 1 + bbase + float(bx[bown1 - 1]), True
     if town1 > town0:
         a = town0 + tbase + float(tx[town0])
         b = town1 - 1 + tbase + float(tx[town1 - 1])
@@ -307,9 +341,9 @@ def coverage(tx, bx, g):
         return False
     if thi - 1 + tbase < g.tlast and thi - 1 + tbase + float(tx[thi - 1]) < hi + ct:
         return False
-    if blo + bbase > 0 and blo + bbase > lo - cb:
+    if blo + bbase > 0 and blo + bbase + float(bx[blo]) > lo - cb:
         return False
-    if bhi - 1 + bbase < g.bcols - 1 and bhi - 1 + bbase < hi + cb:
+    if bhi - 1 + bbase < g.bcols - 1 and bhi - 1 + bbase + float(bx[bhi - 1]) < hi + cb:
         return False
     return True
 
