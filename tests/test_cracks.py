@@ -177,3 +177,26 @@ def test_what_the_interface_takes_inside_each_contour():
     assert 15 < lam < 18                                       # "about 15 a at k_x = 0.1"
     inner, outer = cracks.interface_take(run, f)
     assert inner == pytest.approx(0.006, rel=0.02) and outer == pytest.approx(0.011, rel=0.02)
+
+
+def test_field_route_on_a_drawn_run():
+    """Frames of a tip running at 0.6 c_r over 400 sites with tau = tau_0 + K_II / sqrt(2 pi xi) ahead of it:
+    every frame of the steady stretch returns K_II, tau_0 and G = 1/2 H(v) K_II^2 of the Born continuum."""
+    n, v, K, tau0 = 400, 0.6, 0.15, 0.014
+    x = (np.arange(n) + 0.5) / n
+    t = np.arange(0.0, 0.6, 0.01)
+    tip_t = x / v                                     # the tip reaches each site centre at x / v
+    f = SimpleNamespace(tip={"x": x, "t": tip_t})
+    xi = (x[None, :] - v * t[:, None]) * n
+    sxy = np.where(xi > 0, tau0 + K / np.sqrt(2 * math.pi * np.maximum(xi, 1e-9)), 0.0)
+    scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
+             "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
+    run = SimpleNamespace(attrs={"c_r": 1.0, "l": float(n)}, interface={"kx": np.full(n, 0.1), "sxy": sxy}, x=x,
+                          times=t, scene=scene)
+    rows = cracks.field_g_run(run, f)
+    assert len(rows) >= 20
+    m = cracks._material(run)
+    want = cracks.field_g(K * DENSITY, v, m.kn_top, m.kt_top)
+    for r in rows:
+        assert r["K_II"] == pytest.approx(K, rel=1e-6) and r["tau_0"] == pytest.approx(tau0, rel=1e-6)
+        assert r["G"] == pytest.approx(want, rel=1e-6)

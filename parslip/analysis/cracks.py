@@ -333,8 +333,7 @@ def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
     c_r, l = float(run.attrs["c_r"]), float(run.attrs["l"])
     x, t, sxy = run.x, run.times, run.interface["sxy"]
     d = 1.0 if st["V"] >= 0 else -1.0
-    want = int(np.count_nonzero((np.arange(1, len(x) + 1) >= window[0] * lam) & (np.arange(1, len(x) + 1)
-                                                                                  <= window[1] * lam)))
+    want = int(math.floor((window[1] - window[0]) * lam * len(x) / l))     # sites a whole window holds, at least
     rows = []
     for k in np.flatnonzero((t >= st["t0"]) & (t <= st["t1"])):
         x_tip = float(st["x_at"](t[k]))
