@@ -37,6 +37,15 @@ because stresses and gradients near a lattice tip are not those of a continuum, 
 exact.  With friction behind the tip (bonds that re-form and break again inside R) F also carries what they
 dissipate: the contour at two radii says how much.
 
+Route 1 needs snapshots during the front's steady stretch, and snapshots are spread evenly over the drive.
+Without writing them all: run to just before the front with a checkpoint at the end, then extend the run
+from it with a dense cadence (``drive.duration`` and ``output.snapshots`` may change on a restart), e.g.
+
+    parslip run S --out R --set drive.duration=T_pre --set checkpoint.every=T_pre --set output.snapshots=1
+    parslip run S --out R --restart R.ckpt.h5 --set drive.duration=T_end --set output.snapshots=N
+
+which writes only the snapshots of the new cadence that fall after T_pre.
+
 Route 2.  The Born lattice's long-wave limit is an elastic continuum with moduli C_abkl = (rho/2) sum over the
 six bonds of K_ak n_b n_l (``born_moduli``): sigma = lambda' tr(eps) I + 2 mu' eps + 2 eta omega with
 mu' + eta = rho c_s^2 (``model.physics``).  Its bulk waves are isotropic, but the eta term (a null Lagrangian
