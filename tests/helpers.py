@@ -211,6 +211,21 @@ def reference_run(directory, scene: dict, *sets: str):
     return sc, out
 
 
+def assert_extension_is_the_run(sc, out, ref: dict, half: float, n_first: int, n_then: int) -> None:
+    """Scene ``sc`` run to drive.duration = ``half`` on ``n_first`` ranks, then continued from its end
+    checkpoint to the scene's own duration on ``n_then`` ranks: its interface record must be ``ref``'s (the
+    datasets of the uninterrupted run) bit for bit (snapshot times depend on the duration)."""
+    p = run_cli(n_first, "run", sc, "--out", out, "--no-png", "--quiet", "--set", f"drive.duration={half!r}")
+    assert p.returncode == 0, p.stderr
+    p = run_cli(n_then, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", str(out) + ".ckpt.h5")
+    assert p.returncode == 0, p.stderr
+    got, attrs = datasets(out)
+    assert attrs["status"] == "complete"
+    for name in ref:
+        if name.startswith("interface/"):
+            assert got[name].tobytes() == ref[name].tobytes(), name
+
+
 def datasets(path) -> tuple[dict, dict]:
     """Every dataset of an HDF5 file by name, and its root attributes."""
     import h5py

@@ -6,7 +6,8 @@ import pathlib
 import numpy as np
 import pytest
 
-from helpers import SMALL, reference, require, run_cli, scene, simulation, small_toml, datasets
+from helpers import (SMALL, assert_extension_is_the_run, datasets, reference, require, run_cli, scene, simulation,
+                     small_toml)
 from parslip.engine.kernels import interface as ik
 from parslip.model.interface import PARTNER
 from parslip.errors import NonFiniteError
@@ -153,16 +154,7 @@ def test_drifted_substrate_runs_the_same_on_1_and_3_ranks_and_through_a_restart(
     got, _ = datasets(outs[3])
     assert ref.keys() == got.keys() and all(ref[k].tobytes() == got[k].tobytes() for k in ref)
     assert len(ref["interface/events/kind"]) > 20
-    out = tmp_path / "r.vtkhdf"
-    p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=6.0")
-    assert p.returncode == 0, p.stderr
-    p = run_cli(3, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", str(out) + ".ckpt.h5")
-    assert p.returncode == 0, p.stderr
-    got, attrs = datasets(out)
-    assert attrs["status"] == "complete"
-    for name in ref:
-        if name.startswith("interface/"):
-            assert got[name].tobytes() == ref[name].tobytes(), name
+    assert_extension_is_the_run(sc, tmp_path / "r.vtkhdf", ref, 6.0, 2, 3)
 
 
 def test_wide_gap_is_bitwise_identical_on_1_and_3_ranks(tmp_path):

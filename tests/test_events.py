@@ -173,3 +173,40 @@ def test_event_and_frame_catalogues_agree_on_a_real_run(small_run):
         assert a.direction == b.direction and abs(a.nucleation_x - b.nucleation_x) < 1e-9
         assert b.nucleation_time - dt_frame <= a.nucleation_time <= b.nucleation_time + 1e-12
         assert abs(a.max_speed) < run.events["c_l"]
+
+
+def test_event_energy_and_traction_are_those_of_the_bond_at_its_step():
+    """Each event's energy and traction, recomputed in NumPy from u(n) of its step and the bond it left
+    (break) or formed (re-formation, with the rest offset it took): 1/2 k_x (x_ij - x0)^2 + 1/2 k_y
+    (y_ij - delta0)^2 in m c_r^2, and k_x (x_ij - x0)/(a rho c_r^2)."""
+    from helpers import simulation
+    from parslip.engine import loop as L
+    from parslip.model.interface import KX, KY, X0
+    from parslip.model.physics import DENSITY
+    sim = simulation(SMALL, **{"drive.mode": "shear", "drive.v0": 0.05, "output.snapshots": 0})
+    st, s = sim.setup, sim.state
+    it, g, fr = s.iface, s.iface.geom, sim.frames
+    c_r = st.material.c_r
+    sim.run(until=st.n_drive_start)
+    checked = {EVENT_BREAK: 0, EVENT_FORM: 0}
+    for _ in range(st.n_drive):
+        n = sim.n
+        sim.advance(n + 1)                          # the loop alone: its event record stays for us to read
+        fr.cursor[L.C_BASE] += fr.cursor[L.C_COUNT]
+        fr.cursor[L.C_COUNT] = 0
+        ev, m = it.events, int(it.events.count[0])
+        bx, by, tx, ty = (a.astype(float) for a in s.level(n))
+        for e in range(m):
+            if (ev.site[:m] == ev.site[e]).sum() > 1:
+                continue                            # broke and re-formed in one step: the old x0 is gone
+            j = int(ev.site[e]) + g.tfirst - g.tbase
+            q = int(ev.partner[e])
+            i = q - g.bbase
+            sx = (j + g.tbase - q) + (tx[1, j] - bx[g.brow, i]) - it.bonds[X0, j]
+            sy = ty[1, j] - by[g.brow, i]              # y_ij - delta0
+            kx, ky = it.bonds[KX, j], it.bonds[KY, j]
+            assert ev.energy[e] == pytest.approx((0.5 * kx * sx ** 2 + 0.5 * ky * sy ** 2) / c_r ** 2, rel=1e-9)
+            assert ev.traction[e] == pytest.approx(kx * sx / (DENSITY * c_r ** 2), rel=1e-9, abs=1e-15)
+            checked[int(ev.kind[e])] += 1
+        it.events.count[0] = 0
+    assert checked[EVENT_BREAK] > 10 and checked[EVENT_FORM] > 10, checked

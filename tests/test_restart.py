@@ -11,7 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers import datasets, reference_run, run_cli
+from helpers import assert_extension_is_the_run, datasets, reference_run, run_cli
 
 # SMALL with a checkpoint every 1 l/c_r (about 300 steps).
 CKPT = {"checkpoint.every": 1.0, "output.snapshots": 4}
@@ -60,16 +60,7 @@ def test_a_finished_run_extended_is_the_longer_run(tmp_path, uninterrupted):
     """drive.duration may change on a restart: 3 l/c_r, then continued to 6, equals 6 at once
     (the interface record; snapshot times depend on the duration)."""
     sc, (ref, _) = uninterrupted
-    out = tmp_path / "o.vtkhdf"
-    p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=3.0")
-    assert p.returncode == 0, p.stderr
-    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", "--restart", str(out) + ".ckpt.h5")
-    assert p.returncode == 0, p.stderr
-    got, attrs = datasets(out)
-    assert attrs["status"] == "complete"
-    for name in ref:
-        if name.startswith("interface/"):
-            assert got[name].tobytes() == ref[name].tobytes(), name
+    assert_extension_is_the_run(sc, tmp_path / "o.vtkhdf", ref, 3.0, 2, 1)
 
 
 def test_stop_after_writes_a_checkpoint_and_says_how_to_continue(tmp_path, uninterrupted):

@@ -226,7 +226,8 @@ class Simulation:
         if writer is not None:
             nds = self.setup.n_drive_start
             self.events_written = writer.interface_events(
-                self.events_written, ev.step[:m] - nds, ev.site[:m], ev.kind[:m], ev.partner[:m], self.drive_time)
+                self.events_written, ev.step[:m] - nds, ev.site[:m], ev.kind[:m], ev.partner[:m], ev.energy[:m],
+                ev.traction[:m], self.drive_time)
         ev.count[0] = 0
 
     # ----------------------------------------------------------- checkpoints --

@@ -38,7 +38,7 @@ def event_record(capacity: int):
     """An empty event record (``kernels.interface.Events``) of ``capacity`` events."""
     return ik.Events(step=np.zeros(capacity, np.int64), site=np.zeros(capacity, np.int32),
                      kind=np.zeros(capacity, np.uint8), partner=np.zeros(capacity, np.int32),
-                     count=np.zeros(1, np.int64))
+                     energy=np.zeros(capacity), traction=np.zeros(capacity), count=np.zeros(1, np.int64))
 
 
 def _arena(shapes, dtype) -> list[np.ndarray]:
@@ -107,7 +107,7 @@ class State:
         else:
             geom = ik.Geometry(*([0] * len(ik.Geometry._fields)))
         consts = ik.Constants(inv_l=dt.type(1.0 / setup.l),
-                              traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)))
+                              traction=dt.type(1.0 / (DENSITY * mat.c_r ** 2)), energy=dt.type(1.0 / mat.c_r ** 2))
         geom = ik.Geometry(*(int(v) for v in geom))
         self.iface = ik.Iface(bonds=bonds, rules=law.rules(dt, setup), claim=np.zeros(wt, np.int64),
                               taken=np.zeros(max(wb, 1), np.int8), ext_x=np.zeros(wt, dt), ext_y=np.zeros(wt, dt),

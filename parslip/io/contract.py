@@ -33,6 +33,10 @@ The writer (``io.output``) creates exactly these datasets and the readers
       site     int32    the global interface site (the index of /interface/x)
       kind     uint8    1 = break (EVENT_BREAK), 2 = re-formation (EVENT_FORM)
       partner  int32    the substrate column the bond left (break) or joined (re-formation)
+      energy   float64  the bond's stored energy at that step, 1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij -
+                        delta0)^2 (m c_r^2): at the length it broke at (break; it depends on the gap, so
+                        on F_N), or with the rest offset it formed with (re-formation)
+      traction float64  its shear traction k_x (x_ij - x0)/a then (rho c_r^2), as the frames' sxy
     attributes: events_written (how many are valid), site_column0 (the substrate column facing site 0:
     at the start every site s is bonded to column site_column0 + s)
   /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots
@@ -85,6 +89,9 @@ EVENT_DATASETS = {
     "site": (np.int32, "global interface site"),
     "kind": (np.uint8, "1 = break, 2 = re-formation"),
     "partner": (np.int32, "substrate column left (break) or joined (re-formation)"),
+    "energy": (np.float64, "m c_r^2: the bond's stored energy 1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 "
+                           "at that step"),
+    "traction": (np.float64, "rho c_r^2: the bond's shear traction k_x (x_ij - x0)/a at that step, as sxy"),
 }
 EVENT_BREAK, EVENT_FORM = 1, 2
 
@@ -135,7 +142,8 @@ def read_events(path: str) -> dict | None:
         if g is None:
             return None
         n = int(g.attrs.get("events_written", 0))
-        out = {name: g[name][:n] for name in EVENT_DATASETS}
+        # A field the file predates (energy, traction) reads as NaN for each of its events.
+        out = {name: g[name][:n] if name in g else np.full(n, np.nan) for name in EVENT_DATASETS}
         out["site_column0"] = int(g.attrs["site_column0"])
         a = f.attrs
         # The time of one step (the events' resolution) and the top block's wave speeds, in l/c_r and c_r.

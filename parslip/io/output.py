@@ -442,7 +442,10 @@ class Output:
                     if name in g:
                         g[name].resize(nf, axis=0)
             if EVENTS in g:                  # events past the checkpoint's are written again from there
-                for name in EVENT_DATASETS:
+                for name, (dt_, unit) in EVENT_DATASETS.items():
+                    if name not in g[EVENTS]:    # a file from before the field existed: NaN for its events
+                        g[EVENTS].create_dataset(name, data=np.full(g[EVENTS]["step"].shape, np.nan, dt_),
+                                                 maxshape=(None,), chunks=(EVENT_CHUNK,)).attrs["units"] = unit
                     g[EVENTS][name].resize(self.spec.events_written, axis=0)
                 g[EVENTS].attrs["events_written"] = self.spec.events_written
             if "VTKHDF" in f:
@@ -503,19 +506,20 @@ class Output:
             self._held = True
             hooks.hold(f"{self.path}.held")
 
-    def interface_events(self, k0: int, steps, sites, kinds, partners, time_of) -> int:
-        """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``)
-        at index ``k0`` of /interface/events, in the contract's order: by step, then site, then kind.
-        Collective, also for a rank with none; ``time_of(steps)`` gives their times (l/c_r).  Returns the
-        events in the file, the same on every rank."""
+    def interface_events(self, k0: int, steps, sites, kinds, partners, energies, tractions, time_of) -> int:
+        """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``, the
+        bonds' stored ``energies`` and shear ``tractions``) at index ``k0`` of /interface/events, in the
+        contract's order: by step, then site, then kind.  Collective, also for a rank with none;
+        ``time_of(steps)`` gives their times (l/c_r).  Returns the events in the file, the same on every rank."""
         mine = (np.asarray(steps, np.int64), np.asarray(sites, np.int32), np.asarray(kinds, np.uint8),
-                np.asarray(partners, np.int32))
+                np.asarray(partners, np.int32), np.asarray(energies, np.float64), np.asarray(tractions, np.float64))
         parts = [mine] if self.size == 1 else self.comm.gather(mine, root=0)
         total = None
         if self.root:
-            step, site, kind, partner = (np.concatenate(col) for col in zip(*parts))
+            step, site, kind, partner, energy, traction = (np.concatenate(col) for col in zip(*parts))
             order = np.lexsort((kind, site, step))
-            data = {"step": step[order], "site": site[order], "kind": kind[order], "partner": partner[order]}
+            data = {"step": step[order], "site": site[order], "kind": kind[order], "partner": partner[order],
+                    "energy": energy[order], "traction": traction[order]}
             data["time"] = np.asarray(time_of(data["step"]), np.float64)
             total = k0 + len(order)
         if self.size > 1:

@@ -60,8 +60,9 @@ BREAK, FORM = 1, 2
 #   tcover, bcover   reach (a) the halo must cover beyond this rank's interest (``layout.Reach``)
 Geometry = namedtuple("Geometry", "tbase tlo thi town0 town1 bbase blo bhi bown0 bown1 brow tfirst tlast "
                                   "bcols rigid tcover bcover")
-# Constants of the rank's interface record, in the state's float type: inv_l = 1/l; traction = 1/(a rho c_r^2).
-Constants = namedtuple("Constants", "inv_l traction")
+# Constants of the rank's interface record, in the state's float type: inv_l = 1/l; traction = 1/(a rho c_r^2);
+# energy = 1/c_r^2 (an energy in m c^2 times it is in m c_r^2).
+Constants = namedtuple("Constants", "inv_l traction energy")
 # The interface arrays of one rank, indexed by local column of the block's interface row (top sites) or
 # the substrate's (bottom sites): bonds, the per-site bond state [row, site] with the rows of
 # ``model.interface.BOND_ROWS`` (partner: global substrate column, -1 broken; x0: rest offset; the site's
@@ -77,9 +78,12 @@ Iface = namedtuple("Iface", "bonds rules claim taken ext_x ext_y exb_x exb_y zer
 #   site     the global interface site (0 = the block's first column)
 #   kind     BREAK or FORM
 #   partner  the substrate column the bond left (BREAK) or joined (FORM)
+#   energy   the bond's stored energy at that step, 1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 (m c_r^2),
+#            at the positions u(n) it broke at (BREAK) or with the rest offset it formed with (FORM)
+#   traction its shear traction then, k_x (x_ij - x0)/(a rho c_r^2) (rho c_r^2), as the frames' sxy
 #   count    count[0]: events held.  The caller sizes the arrays for the worst case between two agreements
 #            of the ranks (2 events per OWNED site per step) and empties them before they can overflow.
-Events = namedtuple("Events", "step site kind partner count")
+Events = namedtuple("Events", "step site kind partner energy traction count")
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -122,13 +126,19 @@ def _partner(bonds, j):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _event(ev, n, site, kind, q):
-    """Append one event to the record ``ev`` (room is guaranteed by the caller's agreement)."""
+def _event(it, n, j, site, kind, q, dx, dy):
+    """Append one event of top site j (local column; ``site`` global), bond (x_ij, y_ij) = (dx, dy), to the
+    record ``it.events`` (room is guaranteed by the caller's agreement)."""
+    ev, bonds, k = it.events, it.bonds, it.consts
     c = ev.count[0]
     ev.step[c] = n
     ev.site[c] = site
     ev.kind[c] = kind
     ev.partner[c] = q
+    sx = dx - bonds[X0, j]
+    sy = dy - it.rules.delta0
+    ev.energy[c] = (0.5 * bonds[KX, j] * sx * sx + 0.5 * bonds[KY, j] * sy * sy) * k.energy
+    ev.traction[c] = bonds[KX, j] * sx * k.traction
     ev.count[0] = c + 1
 
 
@@ -193,7 +203,7 @@ def _breaks(n, tx, ty, bx, by, it, zero):
             bonds[PARTNER, j] = -1
             if top_own:
                 it.counters[BREAKS] += 1
-                _event(it.events, n, j + site0, BREAK, q)
+                _event(it, n, j, j + site0, BREAK, q, dx, dy)
         it.claim[nfree] = j
         nfree += 1
     return nfree
@@ -293,7 +303,7 @@ def _grants(n, nfree, tx, ty, bx, by, it, zero):
         _apply(j, i, dx, dy, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
         if top_own:
             it.counters[FORMS] += 1
-            _event(it.events, n, j + site0, FORM, i + bbase)
+            _event(it, n, j, j + site0, FORM, i + bbase, dx, dy)
 
 
 @njit(cache=True, inline="always", _nrt=False)
