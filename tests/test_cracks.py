@@ -200,3 +200,13 @@ def test_field_route_on_a_drawn_run():
     for r in rows:
         assert r["K_II"] == pytest.approx(K, rel=1e-6) and r["tau_0"] == pytest.approx(tau0, rel=1e-6)
         assert r["G"] == pytest.approx(want, rel=1e-6)
+
+
+def test_gamma_falls_back_to_the_frames_when_the_events_predate_their_energies():
+    f = drawn_front()
+    ev = {"site": np.arange(20), "step": f.tip["step"], "kind": np.ones(20, np.uint8), "energy": np.full(20, np.nan)}
+    syy = np.zeros((int(f.tip["frame"].max()) + 1, 20))
+    iface = {"syy": syy, "kx": np.full(20, 0.1), "ky": np.full(20, 0.3), "delta_b": np.full(20, 0.7)}
+    run = SimpleNamespace(events=ev, attrs={"c_r": 1.0}, interface=iface, x=f.tip["x"], scene={"interface.delta0": 0.5})
+    g = cracks.gamma_run(run, f)
+    assert g["source"] == "frames" and np.allclose(g["Gamma"], 0.5 * 0.1 * (0.49 - 0.25))

@@ -356,6 +356,11 @@ def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
     return rows
 
 
+def _has_energy(ev) -> bool:
+    """Whether the events carry their stored energies (a file written before they did reads NaN)."""
+    return ev is not None and "energy" in ev and bool(np.isfinite(ev["energy"]).any())
+
+
 def gamma_run(run, front) -> dict:
     """Gamma per site on the front's steady stretch (m c_r^2 / a: one site per spacing a): the stored energy of
     the bond at the break by which the front's tip reached the site, from the event's ``energy`` when the run
@@ -364,7 +369,7 @@ def gamma_run(run, front) -> dict:
     ev, c_r, iface = run.events, float(run.attrs["c_r"]), run.interface
     sites = np.clip(np.rint(np.asarray(front.tip["x"]) * len(run.x) - 0.5).astype(int), 0, len(run.x) - 1)
     sl = slice(st["lo"], st["hi"])
-    if ev is not None and "energy" in ev:
+    if _has_energy(ev):
         key = {(int(s), int(k)): e for s, k, e, kind in zip(ev["site"], ev["step"], ev["energy"], ev["kind"])
                if kind == 1}
         g = np.array([key.get((int(s), int(k)), np.nan) for s, k in zip(sites[sl], front.tip["step"][sl])])
@@ -384,7 +389,7 @@ def interface_take(run, front, radii: tuple = CONTOUR_RADII) -> list[float]:
     steady front this is route 1's G at that radius by energy conservation, read off the bonds instead of the
     fields: a check of route 1 that shares none of its data.  NaN without /interface/events/energy."""
     ev = run.events
-    if ev is None or "energy" not in ev:
+    if not _has_energy(ev):
         return [math.nan for _ in radii]
     lam, st, l = process_zone(run), steady_stretch(front), float(run.attrs["l"])
     t = np.asarray(ev["time"], float)
