@@ -113,7 +113,8 @@ def mode2_compliance(v: float, kn: float, kt: float, rho: float = DENSITY) -> fl
 
 def freund_mode2(v: float, c_s: float, c_l: float, mu: float) -> float:
     """Freund's (1990, Eq. 5.3.10) H(v) = v^2 alpha_s / (mu c_s^2 D(v)) of an isotropic solid, G = 1/2 H K_II^2:
-    alpha = sqrt(1 - v^2/c^2), D = 4 alpha_s alpha_l - (1 + alpha_s^2)^2; 2(1 - nu)/(2 mu)... at v -> 0."""
+    alpha = sqrt(1 - v^2/c^2), D = 4 alpha_s alpha_l - (1 + alpha_s^2)^2; it tends to (1 - nu)/mu as v -> 0 and
+    diverges at the classical Rayleigh speed."""
     a_s, a_l = math.sqrt(1 - (v / c_s) ** 2), math.sqrt(1 - (v / c_l) ** 2)
     D = 4 * a_s * a_l - (1 + a_s ** 2) ** 2
     return v * v * a_s / (mu * c_s * c_s * D)
