@@ -283,3 +283,25 @@ def read_timings(path: str) -> dict:
     """The run's timings (``TIMINGS``) from its root attributes; {} for a file written without them."""
     attrs = read_attrs(path)
     return {k[len(TIMING_PREFIX):]: v for k, v in attrs.items() if k.startswith(TIMING_PREFIX)}
+
+
+def read_snapshot_arrays(path: str, k: int) -> dict:
+    """Snapshot ``k`` of a run file as plain arrays, without pyvista: ``points`` (N, 3) positions in a and
+    ``velocity`` (N, 3) half-step velocities (internal units), both in global node id order; ``cells`` (M, 2)
+    the line cells' node ids (every bulk bond, then one cell per interface site: its top node and the substrate
+    node it is bonded to, the top node twice while broken) and ``interface`` (M,) 1 on the interface cells;
+    ``time`` in l/c_r."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        g = f[VTKHDF]
+        S = int(g["Steps"].attrs["NSteps"])
+        if not 0 <= k < S:
+            from ..errors import ConfigError
+            raise ConfigError(f"snapshot {k}: out of range; accepted: 0 <= k < {S} ({path})")
+        p0, c0 = int(g["Steps/PointOffsets"][k]), int(g["Steps/CellOffsets"][k])
+        n, m = int(g["NumberOfPoints"][k]), int(g["NumberOfCells"][k])
+        q0 = int(g["Steps/ConnectivityIdOffsets"][k])
+        return {"points": g["Points"][p0:p0 + n], "velocity": g["PointData/velocity"][p0:p0 + n],
+                "cells": g["Connectivity"][q0:q0 + 2 * m].reshape(m, 2),
+                "interface": g["CellData/interface"][c0:c0 + m], "time": float(g["Steps/Values"][k])}

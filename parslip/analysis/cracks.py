@@ -1,0 +1,421 @@
+"""Fronts as cracks: the energy that reaches a front's tip, by two independent routes, and what its breaks take.
+
+A rupture front is read as a dynamic shear (mode II) crack running along the interface.  Three measures,
+each a pure function of arrays plus a thin function of a run:
+
+route 1, ``contour_g``      the energy flux into a closed lattice contour (a square of half-side r) around the
+                            tip, from one whole-lattice snapshot: G = (F - dE/dt - P_damp) / V (below);
+route 2, ``field_g``        the dynamic mode II singular field fitted to the interface shear traction ahead of
+                            the tip, tau(xi) = tau_0 + K_II / sqrt(2 pi xi), turned into G by the velocity
+                            function of the Born continuum (``mode2_compliance``);
+``gamma_sites``             Gamma, the energy the front's breaks released per unit length of its path.
+
+``process_zone`` gives the Palmer-Rice length Lambda both routes' distances are counted in
+(``palmer_rice_length``).
+
+Route 1, from lattice bonds, not continuum fields.  The snapshot holds every node's position p(n) at a drive
+step n and its half-step velocity (p(n) - p(n-1))/dt, hence p(n-1) too, and its cells hold every bulk bond
+and every intact interface bond: two consecutive states of the whole lattice.  Every bond is linear,
+f_i = K (p_j - p_i - d0) on node i (bulk: K = (k_n - k_t) n n^T + k_t I, d0 the reference bond; interface:
+K = diag(k_x, k_y), d0 = (-x0, -delta0) from the top site to its partner), so the energy flux into a region R
+across the bonds its contour cuts is exact on the lattice,
+
+    F = sum over cut bonds (i in R, j out) of 1/2 f_i . (v_i + v_j),     f_i = K (d(n) + d(n-1)) / 2,
+
+the power the bond delivers to R at step n - 1/2 if R holds half of each cut bond's energy.  For a front
+running steadily at V, the energy in a region fixed in the lab changes as the pattern translates,
+dE_R/dt = -V dE/dX, and a lattice column is a symmetry of both lattices, so dE/dX is the centred difference
+of the energy held by R shifted one spacing a forward and back (kinetic 1/2 m v^2 of its nodes, the bonds it
+holds, half of those it cuts).  Then
+
+    G V = F - dE_R/dt - P_damp,        P_damp = zeta m sum_(i in R) v_i^2   ("absolute" damping, m u'' = f - zeta m u')
+
+is the energy per unit time the breaks inside R take: G in m c_r^2 / a, an energy per unit length of
+advance.  Only data on the contour enters F and dE/dX: no derivative of a continuum field near the tip.  The
+continuum J = integral of [(W + T) n_x - sigma_ij n_j du_i/dx] ds is the same flux; the lattice sum is used
+because stresses and gradients near a lattice tip are not those of a continuum, while the bond sums are
+exact.  With friction behind the tip (bonds that re-form and break again inside R) F also carries what they
+dissipate: the contour at two radii says how much.
+
+Route 1 needs snapshots during the front's steady stretch, and snapshots are spread evenly over the drive.
+Without writing them all: run to just before the front with a checkpoint at the end, then extend the run
+from it with a dense cadence (``drive.duration`` and ``output.snapshots`` may change on a restart), e.g.
+
+    parslip run S --out R --set drive.duration=T_pre --set checkpoint.every=T_pre --set output.snapshots=1
+    parslip run S --out R --restart R.ckpt.h5 --set drive.duration=T_end --set output.snapshots=N
+
+which writes only the snapshots of the new cadence that fall after T_pre.
+
+Route 2.  The Born lattice's long-wave limit is an elastic continuum with moduli C_abkl = (rho/2) sum over the
+six bonds of K_ak n_b n_l (``born_moduli``): sigma = lambda' tr(eps) I + 2 mu' eps + 2 eta omega with
+mu' + eta = rho c_s^2 (``model.physics``).  Its bulk waves are isotropic, but the eta term (a null Lagrangian
+in the bulk) changes the tractions on a free surface, so a crack's K-G relation is not the classical one when
+k_t != 0.  ``mode2_compliance`` computes it: for a crack steady at speed v, Stroh's formalism with
+C*_a1k1 = C_a1k1 - rho v^2 delta_ak gives G = 1/2 K^T Re(i A B^-1) K (the crack-closure integral of the
+near-tip field u = sqrt(2/pi) Re[A <sqrt(x + p_alpha y)> B^-1] K), which for k_t = 0 is Freund's
+G = v^2 alpha_s K_II^2 / (2 mu c_s^2 D(v)), D = 4 alpha_s alpha_l - (1 + alpha_s^2)^2 (``freund_mode2``).
+
+Units: lengths in a unless said, energies in m c_r^2, G and Gamma in m c_r^2 / a, tractions in rho c_r^2,
+K_II in rho c_r^2 a^(1/2), speeds in c_r.  Internal arrays (positions, velocities, stiffnesses) are in the
+run's internal units (a = m = 1, velocity unit c_ref; ``model.physics``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model.lattice import DIRECTIONS
+from ..model.physics import DENSITY
+
+# Palmer & Rice (1973): the slip-weakening zone of a shear crack, Lambda = (9 pi / 16) M Gamma / tau_p^2.
+PALMER_RICE = 9.0 * math.pi / 16.0
+# The two contours of route 1 and the fit window of route 2, in process-zone lengths Lambda.
+CONTOUR_RADII = (1.5, 3.0)
+FIT_WINDOW = (1.0, 3.0)
+# The front's steady stretch: the middle 60 % of the sites it broke (as Front.steady_speed).
+STEADY = (0.2, 0.8)
+
+
+# --- the Born continuum -----------------------------------------------------------------------------------
+def born_moduli(kn: float, kt: float, rho: float = DENSITY) -> np.ndarray:
+    """C[a, b, k, l] (m c^2 / a^2, 2D stress per strain) of the triangular Born lattice's long-wave limit:
+    sigma_ab = C_abkl du_k/dx_l with sigma_ab the a-force on a plane of normal b, C = (rho / 2) sum over the
+    six unit bonds n of K_ak n_b n_l, K = (k_n - k_t) n n^T + k_t I (a = 1)."""
+    C = np.zeros((2, 2, 2, 2))
+    for n in DIRECTIONS:
+        K = (kn - kt) * np.outer(n, n) + kt * np.eye(2)
+        C += 0.5 * rho * np.einsum("ak,b,l->abkl", K, n, n)
+    return C
+
+
+def _stroh(C: np.ndarray, v: float, rho: float):
+    """Stroh's eigenvectors (A, B) and roots p (Im p > 0) of a crack steady at speed v along x."""
+    Cs = C.copy()
+    Cs[:, 0, :, 0] -= rho * v * v * np.eye(2)
+    Q, R, T = Cs[:, 0, :, 0], Cs[:, 0, :, 1], Cs[:, 1, :, 1]
+    Ti = np.linalg.inv(T)
+    N = np.block([[-Ti @ R.T, Ti], [R @ Ti @ R.T - Q, -R @ Ti]])
+    w, X = np.linalg.eig(N)
+    up = np.argsort(-w.imag)[:2]
+    if not np.all(w[up].imag > 1e-12):
+        raise ValueError(f"v = {v}: no decaying Stroh roots (at or above the shear speed)")
+    return X[:2, up], X[2:, up], w[up]
+
+
+def mode2_compliance(v: float, kn: float, kt: float, rho: float = DENSITY) -> float:
+    """H(v) in G = 1/2 H K_II^2 for a mode II crack steady at speed v (internal units) in the Born continuum
+    of (k_n, k_t): H = Re(i A B^-1)_xx (Stroh, module docstring), in a^2 / (m c^2).  v -> 0 is the static
+    value; for k_t = 0 it is Freund's v^2 alpha_s / (mu c_s^2 D)."""
+    A, B, _ = _stroh(born_moduli(kn, kt, rho), max(v, 1e-3 * math.sqrt(kn + kt)), rho)
+    return float(np.real(1j * A @ np.linalg.inv(B))[0, 0])
+
+
+def freund_mode2(v: float, c_s: float, c_l: float, mu: float) -> float:
+    """Freund's (1990, Eq. 5.3.10) H(v) = v^2 alpha_s / (mu c_s^2 D(v)) of an isotropic solid, G = 1/2 H K_II^2:
+    alpha = sqrt(1 - v^2/c^2), D = 4 alpha_s alpha_l - (1 + alpha_s^2)^2; it tends to (1 - nu)/mu as v -> 0 and
+    diverges at the classical Rayleigh speed."""
+    a_s, a_l = math.sqrt(1 - (v / c_s) ** 2), math.sqrt(1 - (v / c_l) ** 2)
+    D = 4 * a_s * a_l - (1 + a_s ** 2) ** 2
+    return v * v * a_s / (mu * c_s * c_s * D)
+
+
+def crack_field(x, y, v: float, K: float, kn: float, kt: float, rho: float = DENSITY):
+    """The near-tip displacement (N, 2) and velocity (N, 2) of a mode II crack steady at speed v along +x in
+    the Born continuum, tip at the origin, crack on y = 0, x < 0: u = sqrt(2/pi) Re[A <sqrt(z_a)> B^-1] K,
+    z_a = x + p_a y, K = (K_II, 0); velocity -v du/dx.  Traction K_II / sqrt(2 pi x) ahead, none on the faces."""
+    A, B, p = _stroh(born_moduli(kn, kt, rho), v, rho)
+    Bk = np.linalg.solve(B, np.array([K, 0.0]))
+    z = np.asarray(x, float)[:, None] + p[None, :] * np.asarray(y, float)[:, None]
+    sq = np.sqrt(z.astype(complex))
+    u = math.sqrt(2 / math.pi) * np.real((sq * Bk[None, :]) @ A.T)
+    du = math.sqrt(2 / math.pi) * np.real((0.5 / sq * Bk[None, :]) @ A.T)
+    return u, -v * du
+
+
+def palmer_rice_length(kx: float, kn: float, kt: float, a: float = 1.0) -> float:
+    """Palmer-Rice process zone Lambda = (9 pi/16) M Gamma / tau_p^2, in a.
+
+    Gamma / tau_p^2 = a / (2 k_x) for a bond that holds a linear shear traction k_x s / a up to its break
+    (Gamma = k_x s_b^2 / (2 a), tau_p = k_x s_b / a, whatever s_b).  M is the Born continuum's static mode II
+    modulus, 1 / H(0) of ``mode2_compliance``: the mu / (1 - nu) of Palmer and Rice, which is G = (1 - nu)
+    K^2 / (2 mu) in an isotropic solid; with k_t != 0 it is not rho c_s^2 / (1 - nu)."""
+    M = 1.0 / mode2_compliance(0.0, kn, kt)
+    return PALMER_RICE * M * a / (2.0 * kx)
+
+
+# --- route 1: the energy flux into a lattice contour --------------------------------------------------------
+def bulk_bond_stiffness(d_ref: np.ndarray, kn: np.ndarray, kt: np.ndarray) -> np.ndarray:
+    """K (nb, 2, 2) of bulk bonds with reference vectors d_ref (nb, 2): (k_n - k_t) n n^T + k_t I."""
+    n = d_ref / np.linalg.norm(d_ref, axis=1)[:, None]
+    return (np.asarray(kn) - np.asarray(kt))[:, None, None] * n[:, :, None] * n[:, None, :] + \
+        np.asarray(kt)[:, None, None] * np.eye(2)[None]
+
+
+def contour_flux(ref, p, p_prev, dt: float, bonds: dict, box: tuple, V: float, zeta: float = 0.0,
+                 mass: float = 1.0) -> dict:
+    """Route 1 (module docstring) for one pair of consecutive states of a lattice.
+
+    ref (N, 2): reference positions (a), which decide what lies inside the box; p, p_prev (N, 2): positions at
+    steps n and n - 1; dt: the step (internal time); bonds: {"i", "j" (nb,), "K" (nb, 2, 2), "d0" (nb, 2)},
+    the force on i being K (p_j - p_i - d0); box = (x_c, y_c, r): the square |x - x_c| <= r, |y - y_c| <= r;
+    V: the tip's signed speed along x (internal units); zeta: absolute damping rate.  Returns {"G" (energy
+    per unit length, internal), "flux", "dEdt", "damping" (powers, internal), "cut" (bonds cut)}."""
+    i, j, K, d0 = bonds["i"], bonds["j"], bonds["K"], bonds["d0"]
+    vel = (p - p_prev) / dt
+    d1 = p[j] - p[i] - d0
+    d2 = p_prev[j] - p_prev[i] - d0
+    f = 0.5 * np.einsum("bij,bj->bi", K, d1 + d2)                           # on i, at step n - 1/2
+    e_bond = 0.25 * (np.einsum("bi,bij,bj->b", d1, K, d1) + np.einsum("bi,bij,bj->b", d2, K, d2))
+    e_node = 0.5 * mass * np.sum(vel ** 2, axis=1)
+    x_c, y_c, r = box
+
+    def inside(shift):
+        return (np.abs(ref[:, 0] - x_c - shift) <= r) & (np.abs(ref[:, 1] - y_c) <= r)
+
+    def energy(shift):
+        m = inside(shift)
+        return float(e_node[m].sum() + 0.5 * np.dot(m[i].astype(float) + m[j], e_bond))
+
+    m = inside(0.0)
+    side = m[i].astype(float) - m[j]                                          # +1: i inside, -1: j inside
+    flux = float(0.5 * np.sum(side * np.einsum("bi,bi->b", f, vel[i] + vel[j])))
+    dEdt = -V * (energy(1.0) - energy(-1.0)) / 2.0
+    damping = float(zeta * mass * np.sum(vel[m] ** 2))
+    return {"G": (flux - dEdt - damping) / abs(V), "flux": flux, "dEdt": dEdt, "damping": damping,
+            "cut": int(np.count_nonzero(side))}
+
+
+# --- route 2: the singular field ahead of the tip -----------------------------------------------------------
+def mode2_fit(xi, tau) -> tuple[float, float]:
+    """(K_II, tau_0) of tau = tau_0 + K_II / sqrt(2 pi xi) by least squares, linear in (tau_0, K_II): xi > 0
+    the distance ahead of the tip (a), tau the interface shear traction (K_II in tau's unit times a^(1/2)).
+    NaN with fewer than 3 points."""
+    xi, tau = np.asarray(xi, float), np.asarray(tau, float)
+    if len(xi) < 3:
+        return math.nan, math.nan
+    X = np.stack([np.ones_like(xi), 1.0 / np.sqrt(2 * math.pi * xi)], axis=1)
+    (tau0, K), *_ = np.linalg.lstsq(X, tau, rcond=None)
+    return float(K), float(tau0)
+
+
+def field_g(K: float, v: float, kn: float, kt: float, rho: float = DENSITY) -> float:
+    """G = 1/2 H(v) K_II^2 (``mode2_compliance``), all internal units."""
+    return 0.5 * mode2_compliance(v, kn, kt, rho) * K * K
+
+
+# --- Gamma: what the breaks took ------------------------------------------------------------------------------
+def break_energy(syy, kx, ky, delta0: float, delta_b: float, c_r: float = 1.0):
+    """A bond's stored energy at its break (m c^2, internal) when only a frame before the break is known, and
+    its rest offset x0 is 0 (``interface.reform_x0 = "zero"``, and every bond that never re-formed): the bond
+    breaks where its length reaches delta_b; its gap y = delta0 - f_y / k_y is read off the frame's normal
+    traction (f_y = -syy rho c_r^2 a on the top node, syy in rho c_r^2), its shear stretch is then
+    sqrt(delta_b^2 - y^2), and E = 1/2 k_x (delta_b^2 - y^2) + 1/2 k_y (y - delta0)^2.  The gap of the frame
+    is not the gap at the break step: an estimate, used when the events carry no energy."""
+    y = delta0 + np.asarray(syy, float) * DENSITY * c_r * c_r / np.asarray(ky, float)
+    return 0.5 * np.asarray(kx) * np.maximum(delta_b ** 2 - y ** 2, 0.0) + 0.5 * np.asarray(ky) * (y - delta0) ** 2
+
+
+# --- the measures on a run ------------------------------------------------------------------------------------
+def _material(run):
+    from ..model.physics import Material
+    s = run.scene
+    return Material.from_scene(s["material.nu"], s["material.model"], s["material.velocity_unit"],
+                               s["material.bottom_kn"], s["material.bottom_kt"], s.get("material.kn_spring", "along"))
+
+
+def process_zone(run) -> float:
+    """Lambda (a) of a run: ``palmer_rice_length`` with the block's k_n, k_t and the sites' median k_x."""
+    m = _material(run)
+    kx = float(np.median(run.interface["kx"])) if "kx" in run.interface else float(run.scene["interface.kx"])
+    return palmer_rice_length(kx, m.kn_top, m.kt_top)
+
+
+def steady_stretch(front, share: tuple = STEADY) -> dict:
+    """The front's steady stretch: the sites it broke between the fractions ``share`` of its path, their
+    indices into ``front.tip`` ("lo", "hi"), times "t0", "t1" (l/c_r), and the straight line fitted through
+    their arrivals, x_tip(t) = "x_at"(t) (l), of signed speed "V" (c_r)."""
+    tt, xx = np.asarray(front.tip["t"], float), np.asarray(front.tip["x"], float)
+    n = len(tt)
+    lo, hi = int(share[0] * n), max(int(share[1] * n), int(share[0] * n) + 2)
+    V, x0 = np.polyfit(tt[lo:hi], xx[lo:hi], 1)
+    return {"lo": lo, "hi": hi, "t0": float(tt[lo]), "t1": float(tt[hi - 1]), "V": float(V),
+            "x_at": lambda t: x0 + V * np.asarray(t, float)}
+
+
+def _refuse(run, what: str, value, accepted: str):
+    from ..errors import ConfigError
+    raise ConfigError(f"{what} = {value!r} in {run.path}: {accepted}")
+
+
+class _LatticeGeometry:
+    """A run's nodes (reference positions in a, block) and its bulk bonds (stiffness, reference vector), as
+    the snapshot cells list them; built once per run."""
+
+    def __init__(self, run, cells, interface):
+        from ..model.lattice import Lattice
+        s = run.scene
+        if s.get("lattice.substrate", "elastic") != "elastic":
+            _refuse(run, "lattice.substrate", s.get("lattice.substrate"), "route 1 needs an elastic substrate")
+        self.lat = Lattice(s["lattice.top_rows"], s["lattice.top_cols"], s["lattice.bottom_rows"],
+                           s["lattice.bottom_cols"], s["interface.delta0"], "elastic")
+        nodes = self.lat.nodes_in_columns(0, self.lat.ncols)
+        self.ref = np.stack([nodes["x"], nodes["y"]], axis=1)
+        self.block, self.col = nodes["block"], nodes["col"]
+        bulk = cells[interface == 0]
+        m = _material(run)
+        kn = np.where(self.block[bulk[:, 0]] == 1, m.kn_top, m.kn_bottom)
+        kt = np.where(self.block[bulk[:, 0]] == 1, m.kt_top, m.kt_bottom)
+        self.bulk = bulk
+        self.d0 = self.ref[bulk[:, 1]] - self.ref[bulk[:, 0]]
+        self.K = bulk_bond_stiffness(self.d0, kn, kt)
+        top, bot = self.lat.top, self.lat.bottom
+        self.y_interface = 0.5 * (top.y0 + (bot.rows - 1) * np.sqrt(3) / 2)
+        # The box must stay clear of the driven top row and the fixed bottom row, whose forces it cannot see.
+        self.y_free = (np.sqrt(3) / 2, top.y0 + (top.rows - 2) * np.sqrt(3) / 2)
+        self.x_free = (top.col0, top.col0 + top.cols - 1)
+
+
+def _bonds(run, geo, snap) -> dict:
+    """Every bond of a snapshot in ``contour_flux``'s form: the bulk bonds, and each intact interface bond
+    from its top node to its substrate node with K = diag(k_x, k_y), d0 = (-x0, -delta0), x0 = 0."""
+    cells, flag = snap["cells"], snap["interface"]
+    iface = cells[(flag == 1) & (cells[:, 0] != cells[:, 1])]
+    site = geo.col[iface[:, 0]] - geo.lat.top.col0
+    kx, ky = run.interface["kx"][site], run.interface["ky"][site]
+    Ki = np.zeros((len(iface), 2, 2))
+    Ki[:, 0, 0], Ki[:, 1, 1] = kx, ky
+    d0 = np.zeros((len(iface), 2))
+    d0[:, 1] = -float(run.scene["interface.delta0"])
+    return {"i": np.concatenate([geo.bulk[:, 0], iface[:, 0]]), "j": np.concatenate([geo.bulk[:, 1], iface[:, 1]]),
+            "K": np.concatenate([geo.K, Ki]), "d0": np.concatenate([geo.d0, d0])}
+
+
+def _check_route1(run):
+    s = run.scene
+    if s.get("interface.reform_x0", "zero") != "zero":
+        _refuse(run, "interface.reform_x0", s["interface.reform_x0"],
+                "route 1 reads interface bonds from positions, so it needs rest offsets 0 ('zero')")
+    if s.get("time.damping", "absolute") != "absolute":
+        _refuse(run, "time.damping", s["time.damping"], "route 1 subtracts 'absolute' damping only")
+
+
+def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
+    """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
+    square of half-side r Lambda about the tip for each r of ``radii``, the tip at the stretch's fitted line,
+    the box centred on the interface.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
+    "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}; a snapshot whose largest box leaves the free part of either block is skipped."""
+    from ..io import contract
+    _check_route1(run)
+    lam, st = process_zone(run), steady_stretch(front)
+    c_r, dt, l = float(run.attrs["c_r"]), float(run.attrs["dt"]), float(run.attrs["l"])
+    zeta = float(run.scene.get("time.zeta", 0.0))
+    geo, rows = None, []
+    for k, t in enumerate(run.snapshot_times):
+        if not st["t0"] <= t <= st["t1"]:
+            continue
+        snap = contract.read_snapshot_arrays(run.path, k)
+        if geo is None:
+            geo = _LatticeGeometry(run, snap["cells"], snap["interface"])
+        x_tip = float(st["x_at"](t))
+        x_c, y_c, r_max = geo.lat.top.col0 + x_tip * l - 0.5, geo.y_interface, max(radii) * lam
+        if (x_c - r_max - 1 < geo.x_free[0] or x_c + r_max + 1 > geo.x_free[1]
+                or y_c - r_max < geo.y_free[0] or y_c + r_max > geo.y_free[1]):
+            continue
+        p, vel = snap["points"][:, :2], snap["velocity"][:, :2]
+        bonds = _bonds(run, geo, snap)
+        near = np.max(np.abs(geo.ref - (x_c, y_c)), axis=1) <= r_max + 2       # only the bonds the boxes reach
+        keep = near[bonds["i"]] | near[bonds["j"]]
+        bonds = {name: a[keep] for name, a in bonds.items()}
+        parts = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (x_c, y_c, r * lam), st["V"] * c_r, zeta)
+                 for r in radii]
+        rows.append({"t": float(t), "x_tip": x_tip, "V": st["V"], "G": [q["G"] / c_r ** 2 for q in parts],
+                     "radii": [r * lam for r in radii], "parts": parts})
+    return rows
+
+
+def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
+    """Route 2 on every interface frame inside the front's steady stretch: ``mode2_fit`` of /interface/sxy
+    over the sites xi = window[0] Lambda .. window[1] Lambda ahead of the tip (the stretch's fitted line), a
+    frame whose window leaves the contact skipped; G = ``field_g`` at the stretch's speed.  Rows {"t", "x_tip",
+    "V", "K_II" (rho c_r^2 a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}."""
+    lam, st, m = process_zone(run), steady_stretch(front), _material(run)
+    c_r, l = float(run.attrs["c_r"]), float(run.attrs["l"])
+    x, t, sxy = run.x, run.times, run.interface["sxy"]
+    d = 1.0 if st["V"] >= 0 else -1.0
+    want = int(math.floor((window[1] - window[0]) * lam * len(x) / l))     # sites a whole window holds, at least
+    rows = []
+    for k in np.flatnonzero((t >= st["t0"]) & (t <= st["t1"])):
+        x_tip = float(st["x_at"](t[k]))
+        xi = d * (x - x_tip) * l
+        sel = (xi >= window[0] * lam) & (xi <= window[1] * lam)
+        if np.count_nonzero(sel) < want:
+            continue
+        K, tau0 = mode2_fit(xi[sel], sxy[k, sel])
+        G = field_g(K * DENSITY * c_r * c_r, abs(st["V"]) * c_r, m.kn_top, m.kt_top) / c_r ** 2
+        rows.append({"t": float(t[k]), "x_tip": x_tip, "V": st["V"], "K_II": K, "tau_0": tau0, "G": G})
+    return rows
+
+
+def _has_energy(ev) -> bool:
+    """Whether the events carry their stored energies (a file written before they did reads NaN)."""
+    return ev is not None and "energy" in ev and bool(np.isfinite(ev["energy"]).any())
+
+
+def gamma_run(run, front) -> dict:
+    """Gamma per site on the front's steady stretch (m c_r^2 / a: one site per spacing a): the stored energy of
+    the bond at the break by which the front's tip reached the site, from the event's ``energy`` when the run
+    recorded it, else ``break_energy`` from the last frame before the break.  {"x" (l), "Gamma", "source"}."""
+    st = steady_stretch(front)
+    ev, c_r, iface = run.events, float(run.attrs["c_r"]), run.interface
+    sites = np.clip(np.rint(np.asarray(front.tip["x"]) * len(run.x) - 0.5).astype(int), 0, len(run.x) - 1)
+    sl = slice(st["lo"], st["hi"])
+    if _has_energy(ev):
+        key = {(int(s), int(k)): e for s, k, e, kind in zip(ev["site"], ev["step"], ev["energy"], ev["kind"])
+               if kind == 1}
+        g = np.array([key.get((int(s), int(k)), np.nan) for s, k in zip(sites[sl], front.tip["step"][sl])])
+        return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "events"}
+    frames = np.maximum(np.asarray(front.tip["frame"])[sl] - 1, 0)
+    s = sites[sl]
+    delta_b = iface["delta_b"][s] if "delta_b" in iface else float(run.scene["interface.delta_b"])
+    g = break_energy(iface["syy"][frames, s], iface["kx"][s], iface["ky"][s], float(run.scene["interface.delta0"]),
+                     delta_b, c_r) / c_r ** 2
+    return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "frames"}
+
+
+def interface_take(run, front, radii: tuple = CONTOUR_RADII) -> list[float]:
+    """What the interface takes inside each contour of route 1, per unit advance (m c_r^2 / a), from the events'
+    stored energies: over the steady stretch, the energy of every break minus that of every re-formation whose
+    site lay within r Lambda of the tip (the stretch's fitted line) at its step, over V (t1 - t0).  For a
+    steady front this is route 1's G at that radius by energy conservation, read off the bonds instead of the
+    fields: a check of route 1 that shares none of its data.  NaN without /interface/events/energy."""
+    ev = run.events
+    if not _has_energy(ev):
+        return [math.nan for _ in radii]
+    lam, st, l = process_zone(run), steady_stretch(front), float(run.attrs["l"])
+    t = np.asarray(ev["time"], float)
+    sel = (t >= st["t0"]) & (t <= st["t1"])
+    dist = np.abs((run.x[ev["site"][sel]] - st["x_at"](t[sel])) * l)
+    sign = np.where(ev["kind"][sel] == 1, 1.0, -1.0)
+    e = sign * np.asarray(ev["energy"], float)[sel]
+    advance = abs(st["V"]) * (st["t1"] - st["t0"]) * l
+    return [float(e[dist <= r * lam].sum() / advance) for r in radii]
+
+
+def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_WINDOW) -> dict:
+    """The per-front scalars, means over the front's steady stretch: G_contour_inner, G_contour_outer (route 1
+    at the two radii), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
+    snapshots and frames each mean holds (NaN where none); take_inner, take_outer (``interface_take``)."""
+    c = contour_g_run(run, front, radii)
+    f = field_g_run(run, front, window)
+    g = gamma_run(run, front)
+    take = interface_take(run, front, radii)
+
+    def mean(a):
+        a = np.asarray(a, float)
+        a = a[np.isfinite(a)]
+        return float(a.mean()) if len(a) else math.nan
+    return {"G_contour_inner": mean([r["G"][0] for r in c]), "G_contour_outer": mean([r["G"][-1] for r in c]),
+            "G_field": mean([r["G"] for r in f]), "Gamma": mean(g["Gamma"]), "Gamma_source": g["source"],
+            "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f),
+            "take_inner": take[0], "take_outer": take[-1]}
