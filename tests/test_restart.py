@@ -159,6 +159,9 @@ def test_a_checkpoint_written_by_an_earlier_version_still_restarts(tmp_path):
     for name, dest in (("run.vtkhdf.gz", out), ("run.vtkhdf.ckpt.h5.gz", tmp_path / "old.vtkhdf.ckpt.h5")):
         with gzip.open(data / name, "rb") as src, open(dest, "wb") as dst:
             shutil.copyfileobj(src, dst)
+    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "interface.contact=1.0",
+                "--restart", str(out) + ".ckpt.h5")         # a key added since: written with its old behaviour
+    assert p.returncode == 2 and "interface.contact = 1.0 but the checkpoint was written with 0.0" in p.stderr
     p = run_cli(2, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=6.0",
                 "--restart", str(out) + ".ckpt.h5")
     assert p.returncode == 0, p.stderr

@@ -19,7 +19,8 @@ renames it over ``PATH``: a process killed at any moment leaves the previous
 checkpoint whole.  Reading: ``validate`` refuses, with one line naming what
 is wrong (exit 2), a file that is not a complete parslip checkpoint, or one
 from another scene, except for the keys ``SAFE_KEYS`` that may change on a
-restart (duration, output cadence, progress, checkpoint cadence).
+restart (duration, output cadence, progress, checkpoint cadence).  A key the
+checkpoint's scene lacks (added since) counts as its ``IMPLIED`` value.
 """
 from __future__ import annotations
 
@@ -34,6 +35,9 @@ FORMAT = "parslip checkpoint 3"          # 2: with drive_force; 3: with events_w
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
              "output.buffer_frames", "output.buffer_events", "checkpoint.every", "checkpoint.wall",
              "interface.slip_reach", "run.watchdog")
+# Keys added to the scene since checkpoints of this format were first written, with the value that gives
+# the behaviour of the code that wrote them: a checkpoint whose scene lacks such a key was written with it.
+IMPLIED = {"interface.contact": 0.0, "time.damping": "absolute"}
 # Datasets by global node id, with their columns (0: one value per node), then one per bond row by site.
 NODE_DATASETS = {"u": 2, "u_prev": 2, "drive0": 0, "drive_force": 0}
 DATASETS = tuple(NODE_DATASETS) + BONDS.checkpoint
@@ -129,9 +133,10 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
     for key in sorted(set(saved) | set(scene)):
         if key in SAFE_KEYS:
             continue
-        if saved.get(key) != scene.get(key):
+        if saved.get(key, IMPLIED.get(key)) != scene.get(key):
             raise ConfigError(f"--restart {path!r}: {key} = {scene.get(key)!r} but the checkpoint was written with "
-                              f"{saved.get(key)!r}; accepted: the same scene, except {', '.join(SAFE_KEYS)}")
+                              f"{saved.get(key, IMPLIED.get(key))!r}; accepted: the same scene, except "
+                              f"{', '.join(SAFE_KEYS)}")
     return attrs
 
 
