@@ -223,3 +223,26 @@ def test_slip_beyond_the_halo_stops_the_run(tmp_path):
     assert "interface.slip_reach" in p.stderr and "Traceback" not in p.stderr
     with h5py.File(out, "r") as f:
         assert read_status(f).startswith("failed: interface slip reached")
+
+
+@pytest.mark.parallel(nprocs=3)
+def test_a_failure_on_rank_0_reaches_every_rank_of_a_decision():
+    """collective.decide: a ConfigError on rank 0 is that ConfigError everywhere; any other exception is raised
+    as it is on rank 0 and as a RunError naming it on the others (none is left waiting in the broadcast);
+    a value reaches all three ranks."""
+    from mpi4py import MPI
+    from parslip.errors import ConfigError, RunError
+    from parslip.parallel.collective import decide
+    comm = MPI.COMM_WORLD
+
+    def bad_key():
+        raise ConfigError("drive.v0 = -1: accepted: > 0")
+
+    def disk_gone():
+        raise OSError("disk gone")
+
+    with pytest.raises(ConfigError, match="drive.v0 = -1"):
+        decide(comm, bad_key)
+    with pytest.raises(OSError if comm.rank == 0 else RunError, match="disk gone"):
+        decide(comm, disk_gone)
+    assert decide(comm, lambda: comm.rank + 42) == 42
