@@ -210,3 +210,58 @@ def test_gamma_falls_back_to_the_frames_when_the_events_predate_their_energies()
     run = SimpleNamespace(events=ev, attrs={"c_r": 1.0}, interface=iface, x=f.tip["x"], scene={"interface.delta0": 0.5})
     g = cracks.gamma_run(run, f)
     assert g["source"] == "frames" and np.allclose(g["Gamma"], 0.5 * 0.1 * (0.49 - 0.25))
+
+
+def drawn_crack_run(K=0.02, tau0=0.01, kx=0.5):
+    """A crack from site 0 at frame 20, one site a frame (0.33 c_r), with its event record: each break at the
+    step before the frame that first shows it, carrying a drawn stored energy; /interface/sxy ahead of the
+    tip tau_0 + K_II / sqrt(2 pi xi) (xi in a, l = NS a), nothing behind it.  (run, the drawn energies)."""
+    from helpers import DT, NS, blank, draw
+    from parslip.analysis.results import Run
+    from parslip.io.contract import EVENT_BREAK
+    nf = NS + 40
+    it = blank(nf)
+    arr = draw(it, 20, 0, +1, 1, 1000, 0.001, crack=True)
+    energy = np.linspace(0.01, 0.03, NS)
+    step = arr - 1
+    it["events"] = {"step": step, "time": step * DT, "site": np.arange(NS), "kind": np.full(NS, EVENT_BREAK, np.uint8),
+                    "partner": np.arange(NS), "site_column0": 0, "dt": DT, "c_s": math.inf, "c_l": math.inf,
+                    "energy": energy}
+    it["step"] = np.arange(nf)
+    x_tip = (np.arange(nf) + 1 - 20 + 0.5) / NS            # the tip's line through its arrivals, l
+    xi = (it["x"][None, :] - x_tip[:, None]) * NS
+    it["sxy"] = np.where(xi > 0, tau0 + K / np.sqrt(2 * math.pi * np.maximum(xi, 1e-9)), 0.0)
+    it["kx"] = np.full(NS, kx)
+    scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
+             "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883, "interface.kx": kx}
+    return Run.from_arrays(it, scene, {"c_r": 1.0, "l": float(NS)}), energy
+
+
+def test_the_crack_fields_of_a_drawn_front():
+    """The registered fields on a drawn crack: Gamma the mean of the drawn break energies over the middle 60 %
+    of the path (sites 12-47 of 60), G_field the Born continuum's G of the drawn K_II at 1/3 c_r, route 1 null
+    (no snapshots); all in the JSON of the catalogue, defined in analysis.cracks; null on a record without
+    the material."""
+    from helpers import DT, NS
+    from parslip.analysis.fronts import FIELDS
+    run, energy = drawn_crack_run()
+    (f,) = run.fronts()
+    assert f.Gamma == pytest.approx(energy[12:48].mean(), rel=1e-12) and f.Gamma_source == "events"
+    m = cracks._material(run)
+    assert f.G_field == pytest.approx(cracks.field_g(0.02 * DENSITY, 1 / (NS * DT), m.kn_top, m.kt_top), rel=1e-6)
+    assert f.G_contour_inner is None and f.G_contour_outer is None
+    d = f.to_dict()
+    for name in ("G_contour_inner", "G_contour_outer", "G_field", "Gamma", "Gamma_source"):
+        assert FIELDS[name].source == "analysis.cracks" and name in d
+    bare = type(run).from_arrays(run.interface)                 # no material: nothing to measure G with
+    assert all(bare.fronts()[0].field(name) is None for name in ("G_field", "Gamma", "G_contour_inner"))
+
+
+def test_mode2_fit_fits_each_stacked_profile_on_its_own_points():
+    xi = np.tile(np.arange(5.0, 25.0), (3, 1))
+    tau = np.stack([0.1 + k / np.sqrt(2 * math.pi * xi[0]) for k in (0.2, 0.4, 0.6)])
+    xi[1, :10] = np.nan                                          # row 1 fits its last 10 points only
+    xi[2, 2:] = np.nan                                           # row 2 has 2 points: no fit
+    K, tau0 = cracks.mode2_fit(xi, tau)
+    assert K[:2] == pytest.approx([0.2, 0.4], rel=1e-9) and tau0[:2] == pytest.approx([0.1, 0.1], rel=1e-9)
+    assert math.isnan(K[2]) and math.isnan(tau0[2])

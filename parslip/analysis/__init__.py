@@ -5,11 +5,12 @@
   friction    mu(t), the static peak, what became of each front (fate), precursors, stick-slip events
   rupture     measures of rupture as a crack: Andrews' S, daughters, patches, the shear-traction drop
   slip        slip at a site: slip velocity, the slip a front's passage carries
+  cracks      fronts as cracks: the energy release rate G by two routes, and Gamma
 
 Beside them: ``results`` (the run object), ``table`` (a sweep's summary table).  Importing the package
 registers every per-front field (``fronts.FIELDS``).  Never imports the engine; pictures are
 ``parslip.plot``'s, the paper's claims ``parslip.studies.paper``'s."""
-from . import friction, rupture, slip  # noqa: F401  (their per-front fields register on import)
+from . import cracks, friction, rupture, slip  # noqa: F401  (their per-front fields register on import)
 from .fronts import Front, first_break, fronts  # noqa: F401
 from .friction import summary  # noqa: F401
 

@@ -11,7 +11,14 @@ route 2, ``field_g``        the dynamic mode II singular field fitted to the int
 ``gamma_sites``             Gamma, the energy the front's breaks released per unit length of its path.
 
 ``process_zone`` gives the Palmer-Rice length Lambda both routes' distances are counted in
-(``palmer_rice_length``).
+(``palmer_rice_length``).  ``front_energy`` gives every scalar of one front at once.
+
+The per-front fields (``fronts.FIELDS``: ``parslip fronts --json``, ``front.<name>``), means over the front's
+steady stretch, null where the data is missing: ``G_contour_inner``, ``G_contour_outer`` (route 1, from
+snapshots inside the stretch), ``G_field`` (route 2, from the interface frames), ``Gamma`` and
+``Gamma_source``.  Each is computed on first use, the routes once per front; route 1 reads a snapshot only
+when its boxes fit in the lattice at the tip, so an ordinary run (sparse snapshots, a thin block) costs
+nothing there.
 
 Route 1, from lattice bonds, not continuum fields.  The snapshot holds every node's position p(n) at a drive
 step n and its half-step velocity (p(n) - p(n-1))/dt, hence p(n-1) too, and its cells hold every bulk bond
@@ -67,6 +74,7 @@ import numpy as np
 
 from ..model.lattice import DIRECTIONS
 from ..model.physics import DENSITY
+from .fronts import front_field
 
 # Palmer & Rice (1973): the slip-weakening zone of a shear crack, Lambda = (9 pi / 16) M Gamma / tau_p^2.
 PALMER_RICE = 9.0 * math.pi / 16.0
@@ -187,16 +195,26 @@ def contour_flux(ref, p, p_prev, dt: float, bonds: dict, box: tuple, V: float, z
 
 
 # --- route 2: the singular field ahead of the tip -----------------------------------------------------------
-def mode2_fit(xi, tau) -> tuple[float, float]:
+def mode2_fit(xi, tau):
     """(K_II, tau_0) of tau = tau_0 + K_II / sqrt(2 pi xi) by least squares, linear in (tau_0, K_II): xi > 0
     the distance ahead of the tip (a), tau the interface shear traction (K_II in tau's unit times a^(1/2)).
-    NaN with fewer than 3 points."""
+
+    One profile (xi, tau of shape (n,)) gives two floats; profiles stacked on a leading axis (shape (m, n),
+    NaN where a point is left out) give two arrays of m, each the fit of its own row: with z = 1 / sqrt(2 pi
+    xi), K_II = sum (z - <z>)(tau - <tau>) / sum (z - <z>)^2 and tau_0 = <tau> - K_II <z> over the row's
+    points.  NaN with fewer than 3 points."""
     xi, tau = np.asarray(xi, float), np.asarray(tau, float)
-    if len(xi) < 3:
-        return math.nan, math.nan
-    X = np.stack([np.ones_like(xi), 1.0 / np.sqrt(2 * math.pi * xi)], axis=1)
-    (tau0, K), *_ = np.linalg.lstsq(X, tau, rcond=None)
-    return float(K), float(tau0)
+    ok = np.isfinite(xi) & np.isfinite(tau) & (xi > 0)
+    n = ok.sum(axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = np.where(ok, 1.0 / np.sqrt(2 * math.pi * np.where(ok, xi, 1.0)), 0.0)
+        zm = z.sum(axis=-1) / n
+        tm = np.where(ok, tau, 0.0).sum(axis=-1) / n
+        dz = np.where(ok, z - zm[..., None], 0.0)
+        dt = np.where(ok, tau - tm[..., None], 0.0)
+        K = (dz * dt).sum(axis=-1) / (dz * dz).sum(axis=-1)
+    K, tau0 = np.where(n >= 3, K, math.nan), np.where(n >= 3, tm - K * zm, math.nan)
+    return (float(K), float(tau0)) if K.ndim == 0 else (K, tau0)
 
 
 def field_g(K: float, v: float, kn: float, kt: float, rho: float = DENSITY) -> float:
@@ -249,31 +267,45 @@ def _refuse(run, what: str, value, accepted: str):
 
 
 class _LatticeGeometry:
-    """A run's nodes (reference positions in a, block) and its bulk bonds (stiffness, reference vector), as
-    the snapshot cells list them; built once per run."""
+    """A run's nodes (reference positions in a, block, column) from its scene, where route 1's boxes may lie,
+    and (``bulk_bonds``, from the first snapshot's cells) its bulk bonds: stiffness and reference vector."""
 
-    def __init__(self, run, cells, interface):
+    def __init__(self, run):
         from ..model.lattice import Lattice
         s = run.scene
-        if s.get("lattice.substrate", "elastic") != "elastic":
-            _refuse(run, "lattice.substrate", s.get("lattice.substrate"), "route 1 needs an elastic substrate")
+        self.run = run
         self.lat = Lattice(s["lattice.top_rows"], s["lattice.top_cols"], s["lattice.bottom_rows"],
                            s["lattice.bottom_cols"], s["interface.delta0"], "elastic")
         nodes = self.lat.nodes_in_columns(0, self.lat.ncols)
         self.ref = np.stack([nodes["x"], nodes["y"]], axis=1)
         self.block, self.col = nodes["block"], nodes["col"]
-        bulk = cells[interface == 0]
-        m = _material(run)
-        kn = np.where(self.block[bulk[:, 0]] == 1, m.kn_top, m.kn_bottom)
-        kt = np.where(self.block[bulk[:, 0]] == 1, m.kt_top, m.kt_bottom)
-        self.bulk = bulk
-        self.d0 = self.ref[bulk[:, 1]] - self.ref[bulk[:, 0]]
-        self.K = bulk_bond_stiffness(self.d0, kn, kt)
+        self.bulk = None
         top, bot = self.lat.top, self.lat.bottom
         self.y_interface = 0.5 * (top.y0 + (bot.rows - 1) * np.sqrt(3) / 2)
         # The box must stay clear of the driven top row and the fixed bottom row, whose forces it cannot see.
         self.y_free = (np.sqrt(3) / 2, top.y0 + (top.rows - 2) * np.sqrt(3) / 2)
         self.x_free = (top.col0, top.col0 + top.cols - 1)
+
+    def box(self, x_tip: float, l: float, r_max: float):
+        """(x_c, y_c) of the boxes about a tip at x_tip (l), or None when the largest (half-side r_max, a)
+        leaves the free part of either block."""
+        x_c, y_c = self.lat.top.col0 + x_tip * l - 0.5, self.y_interface
+        if (x_c - r_max - 1 < self.x_free[0] or x_c + r_max + 1 > self.x_free[1]
+                or y_c - r_max < self.y_free[0] or y_c + r_max > self.y_free[1]):
+            return None
+        return x_c, y_c
+
+    def bulk_bonds(self, cells, interface):
+        """Fill the bulk bonds (node pairs, reference vectors, stiffnesses) from a snapshot's cells, once."""
+        if self.bulk is not None:
+            return
+        bulk = cells[interface == 0]
+        m = _material(self.run)
+        kn = np.where(self.block[bulk[:, 0]] == 1, m.kn_top, m.kn_bottom)
+        kt = np.where(self.block[bulk[:, 0]] == 1, m.kt_top, m.kt_bottom)
+        self.bulk = bulk
+        self.d0 = self.ref[bulk[:, 1]] - self.ref[bulk[:, 0]]
+        self.K = bulk_bond_stiffness(self.d0, kn, kt)
 
 
 def _bonds(run, geo, snap) -> dict:
@@ -291,45 +323,53 @@ def _bonds(run, geo, snap) -> dict:
             "K": np.concatenate([geo.K, Ki]), "d0": np.concatenate([geo.d0, d0])}
 
 
-def _check_route1(run):
+def route1_blocker(run) -> tuple | None:
+    """Why route 1 cannot read this run, as (key, value, what route 1 needs), or None when it can."""
     s = run.scene
+    if s.get("lattice.substrate", "elastic") != "elastic":
+        return "lattice.substrate", s.get("lattice.substrate"), "route 1 needs an elastic substrate"
     if s.get("interface.reform_x0", "zero") != "zero":
-        _refuse(run, "interface.reform_x0", s["interface.reform_x0"],
+        return ("interface.reform_x0", s["interface.reform_x0"],
                 "route 1 reads interface bonds from positions, so it needs rest offsets 0 ('zero')")
     if s.get("time.damping", "absolute") != "absolute":
-        _refuse(run, "time.damping", s["time.damping"], "route 1 subtracts 'absolute' damping only")
+        return "time.damping", s["time.damping"], "route 1 subtracts 'absolute' damping only"
+    return None
 
 
 def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
     square of half-side r Lambda about the tip for each r of ``radii``, the tip at the stretch's fitted line,
     the box centred on the interface.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
-    "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}; a snapshot whose largest box leaves the free part of either block is skipped."""
+    "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}.  A snapshot whose largest box leaves the
+    free part of either block is skipped before it is read, so a run whose blocks are thinner than the boxes
+    costs nothing.  A run route 1 cannot read (``route1_blocker``) is refused with one line."""
     from ..io import contract
-    _check_route1(run)
+    blocker = route1_blocker(run)
+    if blocker:
+        _refuse(run, *blocker)
     lam, st = process_zone(run), steady_stretch(front)
     c_r, dt, l = float(run.attrs["c_r"]), float(run.attrs["dt"]), float(run.attrs["l"])
     zeta = float(run.scene.get("time.zeta", 0.0))
-    geo, rows = None, []
-    for k, t in enumerate(run.snapshot_times):
-        if not st["t0"] <= t <= st["t1"]:
-            continue
-        snap = contract.read_snapshot_arrays(run.path, k)
-        if geo is None:
-            geo = _LatticeGeometry(run, snap["cells"], snap["interface"])
+    times = np.asarray(run.snapshot_times, float)
+    inside = np.flatnonzero((times >= st["t0"]) & (times <= st["t1"]))
+    geo = _LatticeGeometry(run) if len(inside) else None
+    rows, r_max = [], max(radii) * lam
+    for k in inside:
+        t = float(times[k])
         x_tip = float(st["x_at"](t))
-        x_c, y_c, r_max = geo.lat.top.col0 + x_tip * l - 0.5, geo.y_interface, max(radii) * lam
-        if (x_c - r_max - 1 < geo.x_free[0] or x_c + r_max + 1 > geo.x_free[1]
-                or y_c - r_max < geo.y_free[0] or y_c + r_max > geo.y_free[1]):
+        centre = geo.box(x_tip, l, r_max)
+        if centre is None:
             continue
+        snap = contract.read_snapshot_arrays(run.path, int(k))
+        geo.bulk_bonds(snap["cells"], snap["interface"])
         p, vel = snap["points"][:, :2], snap["velocity"][:, :2]
         bonds = _bonds(run, geo, snap)
-        near = np.max(np.abs(geo.ref - (x_c, y_c)), axis=1) <= r_max + 2       # only the bonds the boxes reach
+        near = np.max(np.abs(geo.ref - centre), axis=1) <= r_max + 2       # only the bonds the boxes reach
         keep = near[bonds["i"]] | near[bonds["j"]]
         bonds = {name: a[keep] for name, a in bonds.items()}
-        parts = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (x_c, y_c, r * lam), st["V"] * c_r, zeta)
+        parts = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (*centre, r * lam), st["V"] * c_r, zeta)
                  for r in radii]
-        rows.append({"t": float(t), "x_tip": x_tip, "V": st["V"], "G": [q["G"] / c_r ** 2 for q in parts],
+        rows.append({"t": t, "x_tip": x_tip, "V": st["V"], "G": [q["G"] / c_r ** 2 for q in parts],
                      "radii": [r * lam for r in radii], "parts": parts})
     return rows
 
@@ -338,23 +378,26 @@ def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
     """Route 2 on every interface frame inside the front's steady stretch: ``mode2_fit`` of /interface/sxy
     over the sites xi = window[0] Lambda .. window[1] Lambda ahead of the tip (the stretch's fitted line), a
     frame whose window leaves the contact skipped; G = ``field_g`` at the stretch's speed.  Rows {"t", "x_tip",
-    "V", "K_II" (rho c_r^2 a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}."""
+    "V", "K_II" (rho c_r^2 a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}.  The frames are fitted together
+    (one array operation), and H(v) is computed once: the stretch has one speed."""
     lam, st, m = process_zone(run), steady_stretch(front), _material(run)
     c_r, l = float(run.attrs["c_r"]), float(run.attrs["l"])
-    x, t, sxy = run.x, run.times, run.interface["sxy"]
+    x, t = np.asarray(run.x, float), np.asarray(run.times, float)
     d = 1.0 if st["V"] >= 0 else -1.0
     want = int(math.floor((window[1] - window[0]) * lam * len(x) / l))     # sites a whole window holds, at least
-    rows = []
-    for k in np.flatnonzero((t >= st["t0"]) & (t <= st["t1"])):
-        x_tip = float(st["x_at"](t[k]))
-        xi = d * (x - x_tip) * l
-        sel = (xi >= window[0] * lam) & (xi <= window[1] * lam)
-        if np.count_nonzero(sel) < want:
-            continue
-        K, tau0 = mode2_fit(xi[sel], sxy[k, sel])
-        G = field_g(K * DENSITY * c_r * c_r, abs(st["V"]) * c_r, m.kn_top, m.kt_top) / c_r ** 2
-        rows.append({"t": float(t[k]), "x_tip": x_tip, "V": st["V"], "K_II": K, "tau_0": tau0, "G": G})
-    return rows
+    ks = np.flatnonzero((t >= st["t0"]) & (t <= st["t1"]))
+    x_tip = np.asarray(st["x_at"](t[ks]), float).reshape(-1)
+    xi = d * (x[None, :] - x_tip[:, None]) * l
+    sel = (xi >= window[0] * lam) & (xi <= window[1] * lam)
+    whole = np.count_nonzero(sel, axis=1) >= want
+    ks, x_tip, xi, sel = ks[whole], x_tip[whole], xi[whole], sel[whole]
+    if not len(ks):
+        return []
+    sxy = np.asarray(run.interface["sxy"][ks], float)
+    K, tau0 = mode2_fit(np.where(sel, xi, np.nan), np.where(sel, sxy, np.nan))
+    G = field_g(K * DENSITY * c_r * c_r, abs(st["V"]) * c_r, m.kn_top, m.kt_top) / c_r ** 2
+    return [{"t": float(t[k]), "x_tip": float(xt), "V": st["V"], "K_II": float(Kk), "tau_0": float(t0),
+             "G": float(g)} for k, xt, Kk, t0, g in zip(ks, x_tip, K, tau0, G)]
 
 
 def _has_energy(ev) -> bool:
@@ -371,9 +414,14 @@ def gamma_run(run, front) -> dict:
     sites = np.clip(np.rint(np.asarray(front.tip["x"]) * len(run.x) - 0.5).astype(int), 0, len(run.x) - 1)
     sl = slice(st["lo"], st["hi"])
     if _has_energy(ev):
-        key = {(int(s), int(k)): e for s, k, e, kind in zip(ev["site"], ev["step"], ev["energy"], ev["kind"])
-               if kind == 1}
-        g = np.array([key.get((int(s), int(k)), np.nan) for s, k in zip(sites[sl], front.tip["step"][sl])])
+        brk = np.flatnonzero(np.asarray(ev["kind"]) == 1)
+        n = len(run.x)
+        key = np.asarray(ev["step"], np.int64)[brk] * n + np.asarray(ev["site"], np.int64)[brk]
+        order = np.argsort(key, kind="stable")
+        want = np.asarray(front.tip["step"], np.int64)[sl] * n + sites[sl]
+        at = np.clip(np.searchsorted(key[order], want), 0, max(len(key) - 1, 0))
+        hit = (key[order][at] == want) if len(key) else np.zeros(len(want), bool)
+        g = np.where(hit, np.asarray(ev["energy"], float)[brk][order][at] if len(key) else np.nan, np.nan)
         return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "events"}
     frames = np.maximum(np.asarray(front.tip["frame"])[sl] - 1, 0)
     s = sites[sl]
@@ -419,3 +467,107 @@ def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_W
             "G_field": mean([r["G"] for r in f]), "Gamma": mean(g["Gamma"]), "Gamma_source": g["source"],
             "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f),
             "take_inner": take[0], "take_outer": take[-1]}
+
+
+# --- the per-front fields -------------------------------------------------------------------------------------
+SCENE_KEYS = ("material.nu", "material.model", "material.velocity_unit", "material.bottom_kn", "material.bottom_kt")
+
+
+def measurable(run, front) -> bool:
+    """Whether a front has a steady stretch to measure G and Gamma on: a run with its material and units
+    (``c_r``, ``l``), a front that moved, and a stretch whose arrivals span a time (a front broken all at once
+    has no speed)."""
+    if run is None or front.direction == 0 or len(front.tip["t"]) < 3:
+        return False
+    if any(k not in run.scene for k in SCENE_KEYS) or any(k not in run.attrs for k in ("c_r", "l")):
+        return False
+    st = STEADY
+    tt = np.asarray(front.tip["t"], float)
+    lo, hi = int(st[0] * len(tt)), max(int(st[1] * len(tt)), int(st[0] * len(tt)) + 2)
+    return float(np.ptp(tt[lo:hi])) > 0
+
+
+def _memo(front, key: str, compute):
+    """``compute()`` once per front: the four fields share their routes' rows."""
+    store = front.__dict__.setdefault("_cracks", {})
+    if key not in store:
+        store[key] = compute()
+    return store[key]
+
+
+def _mean(values) -> float | None:
+    """The mean of the finite values, None when there is none."""
+    a = np.asarray(values, float)
+    a = a[np.isfinite(a)]
+    return float(a.mean()) if len(a) else None
+
+
+def _contour_rows(run, front) -> list[dict]:
+    """Route 1's rows, [] where it reads nothing: a front without a steady stretch, a run route 1 cannot read
+    (``route1_blocker``), or no snapshot inside the stretch (the rows come cheap then: none is read)."""
+    if not measurable(run, front) or route1_blocker(run) or "dt" not in run.attrs:
+        return []
+    return _memo(front, "contour", lambda: contour_g_run(run, front))
+
+
+ROUTE1_DOC = ("mean over the snapshots inside the front's steady stretch (the middle 60 % of its sites): null "
+              "without such a snapshot (write them by a restart with a dense output.snapshots cadence: "
+              "docs/guide/analysis.md, G and Gamma), where the box leaves the free lattice (a block thinner "
+              "than the box), or for a run route 1 cannot read (rigid substrate, interface.reform_x0 other than "
+              "zero, time.damping other than absolute)")
+
+
+@front_field("G_contour_inner", "m c_r^2/a", "G by route 1 (analysis.cracks): the energy flux into a lattice "
+             f"square of half-side {CONTOUR_RADII[0]:g} Lambda about the tip per unit advance (Lambda the "
+             "Palmer-Rice process zone), " + ROUTE1_DOC)
+def g_contour_inner(run, front) -> float | None:
+    """Route 1's G at the inner radius (``contour_g_run``), mean over the stretch's snapshots."""
+    return _mean([r["G"][0] for r in _contour_rows(run, front)])
+
+
+@front_field("G_contour_outer", "m c_r^2/a", f"the same at {CONTOUR_RADII[-1]:g} Lambda: inner and outer agree "
+             "where what the interface dissipates between them (re-formed bonds breaking again) is small")
+def g_contour_outer(run, front) -> float | None:
+    """Route 1's G at the outer radius (``contour_g_run``), mean over the stretch's snapshots."""
+    return _mean([r["G"][-1] for r in _contour_rows(run, front)])
+
+
+@front_field("G_field", "m c_r^2/a", "G by route 2 (analysis.cracks): G = H(v) K_II^2 / 2 (H the Born "
+             "continuum's mode II velocity function at the stretch's speed), K_II from tau = tau_0 + K_II / "
+             f"sqrt(2 pi xi) fitted to /interface/sxy at {FIT_WINDOW[0]:g}-{FIT_WINDOW[1]:g} Lambda ahead of the "
+             "tip; mean over the interface frames inside the steady stretch; null without sxy or where no frame "
+             "holds a whole window on the contact")
+def g_field(run, front) -> float | None:
+    """Route 2's G (``field_g_run``), mean over the stretch's frames."""
+    if not measurable(run, front) or "sxy" not in run.interface:
+        return None
+    return _mean([r["G"] for r in _memo(front, "field", lambda: field_g_run(run, front))])
+
+
+def _gamma(run, front) -> dict | None:
+    """``gamma_run`` once per front, None where it has nothing to read (no event energies and no frames'
+    syy, kx, ky)."""
+    if not measurable(run, front):
+        return None
+    if _has_energy(run.events):                     # gamma_run reads the events then, by each break's step
+        if "step" not in front.tip:
+            return None
+    elif "frame" not in front.tip or any(k not in run.interface for k in ("syy", "kx", "ky")):
+        return None
+    return _memo(front, "gamma", lambda: gamma_run(run, front))
+
+
+@front_field("Gamma", "m c_r^2/a", "the energy the front's breaks released per unit length: the stored energy "
+             "of the bond at each break of its tip (one site per a), mean over the steady stretch; from the "
+             "events' energy, else estimated from the last frame before each break (Gamma_source)")
+def gamma_field(run, front) -> float | None:
+    """Gamma (``gamma_run``), mean over the stretch's sites."""
+    g = _gamma(run, front)
+    return None if g is None else _mean(g["Gamma"])
+
+
+@front_field("Gamma_source", "-", "where Gamma comes from: events (each break's stored energy, exact) or "
+             "frames (estimated from the normal traction of the frame before each break)")
+def gamma_source(run, front) -> str | None:
+    g = _gamma(run, front)
+    return None if g is None else g["source"]
