@@ -25,6 +25,9 @@ from parslip.analysis.results import Run
 from parslip.io.contract import EVENT_FORM as FORM
 
 
+STUDIES = ["precursors", "barriers", "supershear", "heal_time", "heal_speed"]
+
+
 def points(d: str, study: str):
     """(summary row, run) of each point of the sweep in d/interface_<study>."""
     base = os.path.join(d, f"interface_{study}")
@@ -207,6 +210,8 @@ def main():
     p.add_argument("--dir", required=True, help="directory holding the sweeps' OUTDIRs (interface_<study>)")
     p.add_argument("-o", "--out", required=True, help="directory for the figures")
     p.add_argument("--tables", required=True, help="directory for interfaces_<study>.csv")
+    p.add_argument("--only", nargs="+", choices=STUDIES, default=STUDIES,
+                   help="the studies to tabulate (default all): the others' tables and figures are left as they are")
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     os.makedirs(a.tables, exist_ok=True)
@@ -214,26 +219,31 @@ def main():
     def source(rows):
         return {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
 
-    rows, pts = precursors_study(a.dir)
-    print("## precursors\n")
-    print(write(rows, ["point", "load.FN", "drive.rows", "mu_s", "first_break_time", "slip_events",
-                       "first_slip_mu_before", "n_fronts", "n_precursors", "precursor_arrest_l"],
-                os.path.join(a.tables, "interfaces_precursors.csv")))
-    precursor_figure(pts, a.out, source(rows))
-    rows = barriers_study(a.dir)
-    print("\n## barriers\n")
-    print(write(rows, ["point", "drive.mode", "patch delta_b", "first front kind", "first band", "v before", "v inside",
-                       "v after", "bursts", "through", "fate", "born beyond", "n_fronts", "mu_s"],
-                os.path.join(a.tables, "interfaces_barriers.csv")))
-    rows, waves = supershear_study(a.dir)
-    print("\n## supershear\n")
-    print(f"(wave speeds, c_r: {', '.join(f'{k} = {v:.4g}' for k, v in waves.items())})\n")
-    print(write(rows, ["point", "top_rows", "weak band", "delta_b", "kx", "first mean v", "max v", "max band",
-                       *BAND_COLS.values(), "band sites", "supershear fronts", "daughters", "S", "n_fronts"],
-                os.path.join(a.tables, "interfaces_supershear.csv")))
-    supershear_figure(rows, waves, a.out, source(rows))
+    if "precursors" in a.only:
+        rows, pts = precursors_study(a.dir)
+        print("## precursors\n")
+        print(write(rows, ["point", "load.FN", "drive.rows", "mu_s", "first_break_time", "slip_events",
+                           "first_slip_mu_before", "n_fronts", "n_precursors", "precursor_arrest_l"],
+                    os.path.join(a.tables, "interfaces_precursors.csv")))
+        precursor_figure(pts, a.out, source(rows))
+    if "barriers" in a.only:
+        rows = barriers_study(a.dir)
+        print("\n## barriers\n")
+        print(write(rows, ["point", "drive.mode", "patch delta_b", "first front kind", "first band", "v before",
+                           "v inside", "v after", "bursts", "through", "fate", "born beyond", "n_fronts", "mu_s"],
+                    os.path.join(a.tables, "interfaces_barriers.csv")))
+    if "supershear" in a.only:
+        rows, waves = supershear_study(a.dir)
+        print("\n## supershear\n")
+        print(f"(wave speeds, c_r: {', '.join(f'{k} = {v:.4g}' for k, v in waves.items())})\n")
+        print(write(rows, ["point", "top_rows", "weak band", "delta_b", "kx", "first mean v", "max v", "max band",
+                           *BAND_COLS.values(), "band sites", "supershear fronts", "daughters", "S", "n_fronts"],
+                    os.path.join(a.tables, "interfaces_supershear.csv")))
+        supershear_figure(rows, waves, a.out, source(rows))
     for study, key, extra in (("heal_time", "interface.heal_time", "drive.mode"),
                               ("heal_speed", "interface.heal_speed", "drive.v0")):
+        if study not in a.only:
+            continue
         rows = heal_study(a.dir, study)
         print(f"\n## {study}\n")
         print(write(rows, ["point", extra, key, "kind", "mean v", "width a", "re-formed before crossing",
