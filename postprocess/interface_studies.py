@@ -192,15 +192,15 @@ def supershear_figure(rows, waves, out, source):
                     color=c, mfc="none" if tr == 40 else c, label=f"{tr} rows, weak band {band}")
     # The ends of the speed bands (fronts.BANDS): the lattice's Rayleigh speed, the block's c_s and c_l, and
     # the substrate's c_l, the fastest wave carried (a fit above it is a burst).
-    for key, name, ls in (("c_R", "c_R", "-."), ("c_s", "c_s", "--"), ("c_l", "block c_l", ":"),
-                          ("c_max", "substrate c_l", "-")):
+    for key, name, ls, at in (("c_R", "c_R", "-.", 0.93), ("c_s", "c_s", "--", 1.03), ("c_l", "block c_l", ":", 1.03),
+                              ("c_max", "substrate c_l", "-", 1.03)):
         ax.axhline(waves[key], color="0.4", ls=ls, lw=0.8)
-        ax.text(0.051, waves[key] * 1.03, f"{name} = {waves[key]:.3g}", fontsize=7)
+        ax.text(0.051, waves[key] * at, f"{name} = {waves[key]:.3g}", fontsize=7)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("k_x (delta_b = 0.7 drawn 4 % right of 0.6)")
     ax.set_ylabel("largest local front speed / c_r")
-    ax.legend(fontsize=6, loc="lower right")
+    ax.legend(fontsize=6, loc="center right")
     ax.set_title("T0 on weakened interfaces: the fastest fitted speed of each run, bursts included", fontsize=8)
     return save(fig, out, "interfaces_supershear", source)
 
