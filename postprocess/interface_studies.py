@@ -1,6 +1,6 @@
 """The interface studies' tables and figures (docs/studies/interfaces.md), from their sweeps' outputs.
 
-    for s in precursors barriers supershear heal_time heal_speed; do
+    for s in precursors barriers supershear damping heal_time heal_speed; do
         mpiexec -n 2 parslip sweep run/studies/interface_$s.toml -o out/interfaces/interface_$s
     done
     python postprocess/interface_studies.py --dir out/interfaces -o docs/studies/img --tables docs/studies
@@ -25,7 +25,7 @@ from parslip.analysis.results import Run
 from parslip.io.contract import EVENT_FORM as FORM
 
 
-STUDIES = ["precursors", "barriers", "supershear", "heal_time", "heal_speed"]
+STUDIES = ["precursors", "barriers", "supershear", "damping", "heal_time", "heal_speed"]
 
 
 def points(d: str, study: str):
@@ -123,17 +123,18 @@ def band_shares(fronts) -> dict:
     return out
 
 
-def supershear_study(d):
+def supershear_study(d, study="supershear"):
     rows = []
-    for row, run in points(d, "supershear"):
+    for row, run in points(d, study):
         fr = run.fronts()
         moved = [f for f in fr if math.isfinite(f.max_speed)]
         fastest = max(moved, key=lambda f: abs(f.max_speed)) if moved else None
         lo, hi, db = patch_of(run)
         waves = wave_speeds(run)
-        rows.append({"point": row["point"], "top_rows": row["lattice.top_rows"],
+        sc = run.scene
+        rows.append({"point": row["point"], "top_rows": sc["lattice.top_rows"], "damping": sc["time.damping"],
                      "weak band": "0.55 at 0.2-0.5" if math.isfinite(db) else "-",
-                     "delta_b": row["interface.delta_b"], "kx": row["interface.kx"],
+                     "delta_b": sc["interface.delta_b"], "kx": sc["interface.kx"],
                      "first mean v": abs(fr[0].mean_speed) if fr else math.nan, "max v": abs(fastest.max_speed) if fastest else math.nan,
                      "max band": fastest.band if fastest else "-", **band_shares(fr),
                      "supershear fronts": sum(1 for f in fr if f.supershear),
@@ -232,14 +233,18 @@ def main():
         print(write(rows, ["point", "drive.mode", "patch delta_b", "first front kind", "first band", "v before",
                            "v inside", "v after", "bursts", "through", "fate", "born beyond", "n_fronts", "mu_s"],
                     os.path.join(a.tables, "interfaces_barriers.csv")))
-    if "supershear" in a.only:
-        rows, waves = supershear_study(a.dir)
-        print("\n## supershear\n")
+    for study in ("supershear", "damping"):
+        if study not in a.only:
+            continue
+        rows, waves = supershear_study(a.dir, study)
+        print(f"\n## {study}\n")
         print(f"(wave speeds, c_r: {', '.join(f'{k} = {v:.4g}' for k, v in waves.items())})\n")
-        print(write(rows, ["point", "top_rows", "weak band", "delta_b", "kx", "first mean v", "max v", "max band",
-                           *BAND_COLS.values(), "band sites", "supershear fronts", "daughters", "S", "n_fronts"],
-                    os.path.join(a.tables, "interfaces_supershear.csv")))
-        supershear_figure(rows, waves, a.out, source(rows))
+        print(write(rows, ["point", "top_rows", *(["damping"] if study == "damping" else []), "weak band", "delta_b",
+                           "kx", "first mean v", "max v", "max band", *BAND_COLS.values(), "band sites",
+                           "supershear fronts", "daughters", "S", "n_fronts"],
+                    os.path.join(a.tables, f"interfaces_{study}.csv")))
+        if study == "supershear":
+            supershear_figure(rows, waves, a.out, source(rows))
     for study, key, extra in (("heal_time", "interface.heal_time", "drive.mode"),
                               ("heal_speed", "interface.heal_speed", "drive.v0")):
         if study not in a.only:
