@@ -57,7 +57,7 @@ scaling)
     done
     "$PY" -m parslip fronts "$OUT/shear_l500.vtkhdf" ;;
 interfaces)
-    for s in precursors barriers supershear heal_time heal_speed; do
+    for s in precursors barriers supershear damping heal_time heal_speed; do
         "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "run/studies/interface_$s.toml" -o "$OUT/interfaces/interface_$s"
     done
     "$PY" postprocess/interface_studies.py --dir "$OUT/interfaces" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;

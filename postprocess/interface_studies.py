@@ -1,13 +1,15 @@
 """The interface studies' tables and figures (docs/studies/interfaces.md), from their sweeps' outputs.
 
-    for s in precursors barriers supershear heal_time heal_speed; do
+    for s in precursors barriers supershear damping heal_time heal_speed; do
         mpiexec -n 2 parslip sweep run/studies/interface_$s.toml -o out/interfaces/interface_$s
     done
     python postprocess/interface_studies.py --dir out/interfaces -o docs/studies/img --tables docs/studies
 
 (``bash postprocess/docs_numbers.sh interfaces`` runs both.)  Each table, interfaces_<study>.csv, has a row
 per point with the swept keys, the measures (``parslip.analysis.rupture``, ``analysis.friction``) and the
-point's resolved scene and commit; the Markdown tables the page quotes are printed.
+point's resolved scene and commit; the Markdown tables the page quotes are printed.  Speeds are classed by
+the package's bands (``fronts.BANDS``: a front's ``band``, the path's ``stretches``), S is the front field
+``andrews_s`` and a front's end its ``fate`` (``analysis.friction``): this script only tabulates them.
 """
 import argparse
 import math
@@ -18,9 +20,12 @@ import numpy as np
 from parslip.analysis import rupture, table
 from parslip.plot.figures import pyplot, save
 from parslip.analysis.friction import slip_events
-from parslip.analysis.fronts import wave_speeds
+from parslip.analysis.fronts import BANDS, wave_speeds
 from parslip.analysis.results import Run
 from parslip.io.contract import EVENT_FORM as FORM
+
+
+STUDIES = ["precursors", "barriers", "supershear", "damping", "heal_time", "heal_speed"]
 
 
 def points(d: str, study: str):
@@ -91,30 +96,51 @@ def barriers_study(d):
         beyond = [x for x in rupture.daughters(run) if math.isfinite(hi) and x["mother"] == 0 and x["x"] >= hi]
         rows.append({"point": row["point"], "drive.mode": row["drive.mode"],
                      "patch delta_b": db if math.isfinite(db) else 0.7,
-                     "first front kind": f.kind if f else "-", "v before": res["before"], "v inside": res["inside"],
+                     "first front kind": f.kind if f else "-", "first band": (f.band or "-") if f else "-",
+                     "v before": res["before"], "v inside": res["inside"],
                      "v after": res["after"], "bursts": res["bursts"], "through": res["through"], "fate": run.fates()[0] if fr else "-",
                      "born beyond": len(beyond), "n_fronts": len(fr), "mu_s": row["mu_s"],
                      "scene": row["scene"], "commit": row["commit"]})
     return rows
 
 
-def supershear_study(d):
+# The supershear table's column for each speed band (``fronts.BANDS``): the share of a run's fitted sites in it.
+BAND_COLS = {"sub-Rayleigh": "% sub-R", "c_R to c_s": "% c_R-c_s", "supershear": "% supershear",
+             "above block c_l": "% above c_l", "burst": "% burst"}
+assert set(BAND_COLS) == {name for name, _ in BANDS}
+
+
+def band_shares(fronts) -> dict:
+    """The share (%) of the sites of every front's path, over the run, in each speed band (``Front.stretches``:
+    the path cut into bands by each site's fitted local speed), and the number of such sites."""
+    n = {b: 0 for b in BAND_COLS}
+    for f in fronts:
+        for st in f.stretches:
+            n[st["band"]] += st["n_sites"]
+    total = sum(n.values())
+    out = {col: 100.0 * n[b] / total if total else math.nan for b, col in BAND_COLS.items()}
+    out["band sites"] = total
+    return out
+
+
+def supershear_study(d, study="supershear"):
     rows = []
-    for row, run in points(d, "supershear"):
+    for row, run in points(d, study):
         fr = run.fronts()
-        sp = rupture.speed_summary(run)
-        s = rupture.andrews_s(run, fr[0]) if fr else {"S": math.nan}
+        moved = [f for f in fr if math.isfinite(f.max_speed)]
+        fastest = max(moved, key=lambda f: abs(f.max_speed)) if moved else None
         lo, hi, db = patch_of(run)
-        c_l = run.events["c_l"]
-        v1 = abs(fr[0].mean_speed) if fr else math.nan
-        rows.append({"point": row["point"], "top_rows": row["lattice.top_rows"],
-                     "band": "0.55 at 0.2-0.5" if math.isfinite(db) else "-",
-                     "delta_b": row["interface.delta_b"], "kx": row["interface.kx"],
-                     "first mean v": v1 if v1 <= c_l else math.nan, "max v": sp["max_speed"],
-                     "supershear sites": sp["supershear_sites"], "supershear fronts": sp["supershear_fronts"],
-                     "burst sites": sp["burst_sites"], "daughters": len(rupture.daughters(run)), "S": s["S"],
+        waves = wave_speeds(run)
+        sc = run.scene
+        rows.append({"point": row["point"], "top_rows": sc["lattice.top_rows"], "damping": sc["time.damping"],
+                     "weak band": "0.55 at 0.2-0.5" if math.isfinite(db) else "-",
+                     "delta_b": sc["interface.delta_b"], "kx": sc["interface.kx"],
+                     "first mean v": abs(fr[0].mean_speed) if fr else math.nan, "max v": abs(fastest.max_speed) if fastest else math.nan,
+                     "max band": fastest.band if fastest else "-", **band_shares(fr),
+                     "supershear fronts": sum(1 for f in fr if f.supershear),
+                     "daughters": len(rupture.daughters(run)), "S": fr[0].andrews_s if fr else math.nan,
                      "n_fronts": len(fr), "scene": row["scene"], "commit": row["commit"]})
-    return rows
+    return rows, waves
 
 
 def heal_study(d, study):
@@ -129,7 +155,7 @@ def heal_study(d, study):
         else:
             r["drive.v0"] = row["drive.v0"]
         v = abs(f.mean_speed) if f else math.nan
-        r.update({"kind": f.kind if f else "-", "mean v": v if v <= run.events["c_l"] else math.nan,
+        r.update({"kind": f.kind if f else "-", "mean v": v,
                   "width a": f.width if f else math.nan, "re-formed before crossing": reformed_before_crossed(run, f),
                   "n_fronts": len(fr), "n_crossed": row["n_crossed"], "mu_s": row["mu_s"],
                   "scene": row["scene"], "commit": row["commit"]})
@@ -157,23 +183,26 @@ def precursor_figure(pts, out, source):
     return save(fig, out, "interfaces_precursors", source)
 
 
-def supershear_figure(rows, out, source):
+def supershear_figure(rows, waves, out, source):
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax = plt.subplots(figsize=(6, 4.5))
     for tr, m in ((10, "o"), (40, "s")):
         for band, c in (("-", "tab:blue"), ("0.55 at 0.2-0.5", "tab:red")):
-            sel = [r for r in rows if r["top_rows"] == tr and r["band"] == band]
+            sel = [r for r in rows if r["top_rows"] == tr and r["weak band"] == band]
             ax.plot([r["kx"] * (1 + 0.04 * (r["delta_b"] == 0.7)) for r in sel], [r["max v"] for r in sel], m,
-                    color=c, mfc="none" if tr == 40 else c, label=f"{tr} rows, band {band}")
-    ax.axhline(1.098, color="0.4", ls="--", lw=0.8)
-    ax.text(0.051, 1.11, "c_s", fontsize=7)
-    ax.axhline(1.79, color="0.4", ls=":", lw=0.8)
-    ax.text(0.051, 1.80, "c_l", fontsize=7)
+                    color=c, mfc="none" if tr == 40 else c, label=f"{tr} rows, weak band {band}")
+    # The ends of the speed bands (fronts.BANDS): the lattice's Rayleigh speed, the block's c_s and c_l, and
+    # the substrate's c_l, the fastest wave carried (a fit above it is a burst).
+    for key, name, ls, at in (("c_R", "c_R", "-.", 0.93), ("c_s", "c_s", "--", 1.03), ("c_l", "block c_l", ":", 1.03),
+                              ("c_max", "substrate c_l", "-", 1.03)):
+        ax.axhline(waves[key], color="0.4", ls=ls, lw=0.8)
+        ax.text(0.051, waves[key] * at, f"{name} = {waves[key]:.3g}", fontsize=7)
     ax.set_xscale("log")
+    ax.set_yscale("log")
     ax.set_xlabel("k_x (delta_b = 0.7 drawn 4 % right of 0.6)")
     ax.set_ylabel("largest local front speed / c_r")
-    ax.legend(fontsize=6)
-    ax.set_title("T0 on weakened interfaces: the fastest fitted speed of each run", fontsize=8)
+    ax.legend(fontsize=6, loc="center right")
+    ax.set_title("T0 on weakened interfaces: the fastest fitted speed of each run, bursts included", fontsize=8)
     return save(fig, out, "interfaces_supershear", source)
 
 
@@ -182,6 +211,8 @@ def main():
     p.add_argument("--dir", required=True, help="directory holding the sweeps' OUTDIRs (interface_<study>)")
     p.add_argument("-o", "--out", required=True, help="directory for the figures")
     p.add_argument("--tables", required=True, help="directory for interfaces_<study>.csv")
+    p.add_argument("--only", nargs="+", choices=STUDIES, default=STUDIES,
+                   help="the studies to tabulate (default all): the others' tables and figures are left as they are")
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     os.makedirs(a.tables, exist_ok=True)
@@ -189,25 +220,35 @@ def main():
     def source(rows):
         return {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
 
-    rows, pts = precursors_study(a.dir)
-    print("## precursors\n")
-    print(write(rows, ["point", "load.FN", "drive.rows", "mu_s", "first_break_time", "slip_events",
-                       "first_slip_mu_before", "n_fronts", "n_precursors", "precursor_arrest_l"],
-                os.path.join(a.tables, "interfaces_precursors.csv")))
-    precursor_figure(pts, a.out, source(rows))
-    rows = barriers_study(a.dir)
-    print("\n## barriers\n")
-    print(write(rows, ["point", "drive.mode", "patch delta_b", "first front kind", "v before", "v inside",
-                       "v after", "bursts", "through", "fate", "born beyond", "n_fronts", "mu_s"],
-                os.path.join(a.tables, "interfaces_barriers.csv")))
-    rows = supershear_study(a.dir)
-    print("\n## supershear\n")
-    print(write(rows, ["point", "top_rows", "band", "delta_b", "kx", "first mean v", "max v", "supershear sites",
-                       "supershear fronts", "burst sites", "daughters", "S", "n_fronts"],
-                os.path.join(a.tables, "interfaces_supershear.csv")))
-    supershear_figure(rows, a.out, source(rows))
+    if "precursors" in a.only:
+        rows, pts = precursors_study(a.dir)
+        print("## precursors\n")
+        print(write(rows, ["point", "load.FN", "drive.rows", "mu_s", "first_break_time", "slip_events",
+                           "first_slip_mu_before", "n_fronts", "n_precursors", "precursor_arrest_l"],
+                    os.path.join(a.tables, "interfaces_precursors.csv")))
+        precursor_figure(pts, a.out, source(rows))
+    if "barriers" in a.only:
+        rows = barriers_study(a.dir)
+        print("\n## barriers\n")
+        print(write(rows, ["point", "drive.mode", "patch delta_b", "first front kind", "first band", "v before",
+                           "v inside", "v after", "bursts", "through", "fate", "born beyond", "n_fronts", "mu_s"],
+                    os.path.join(a.tables, "interfaces_barriers.csv")))
+    for study in ("supershear", "damping"):
+        if study not in a.only:
+            continue
+        rows, waves = supershear_study(a.dir, study)
+        print(f"\n## {study}\n")
+        print(f"(wave speeds, c_r: {', '.join(f'{k} = {v:.4g}' for k, v in waves.items())})\n")
+        print(write(rows, ["point", "top_rows", *(["damping"] if study == "damping" else []), "weak band", "delta_b",
+                           "kx", "first mean v", "max v", "max band", *BAND_COLS.values(), "band sites",
+                           "supershear fronts", "daughters", "S", "n_fronts"],
+                    os.path.join(a.tables, f"interfaces_{study}.csv")))
+        if study == "supershear":
+            supershear_figure(rows, waves, a.out, source(rows))
     for study, key, extra in (("heal_time", "interface.heal_time", "drive.mode"),
                               ("heal_speed", "interface.heal_speed", "drive.v0")):
+        if study not in a.only:
+            continue
         rows = heal_study(a.dir, study)
         print(f"\n## {study}\n")
         print(write(rows, ["point", extra, key, "kind", "mean v", "width a", "re-formed before crossing",
