@@ -265,3 +265,16 @@ def test_mode2_fit_fits_each_stacked_profile_on_its_own_points():
     K, tau0 = cracks.mode2_fit(xi, tau)
     assert K[:2] == pytest.approx([0.2, 0.4], rel=1e-9) and tau0[:2] == pytest.approx([0.1, 0.1], rel=1e-9)
     assert math.isnan(K[2]) and math.isnan(tau0[2])
+
+
+@pytest.mark.parametrize("k2,xp", [(0.3, 0.02), (-0.05, 0.005), (1.7, 0.11)])
+def test_mode2_fit_shifted_recovers_an_exact_square_root_field(k2, xp):
+    xi = np.arange(1, 9) / 100.0                        # eight sites ahead, l = 100 a
+    sigma = k2 / np.sqrt(2 * np.pi * (xi + xp))
+    k_fit, xp_fit = cracks.mode2_fit_shifted(xi, sigma)
+    assert k_fit == pytest.approx(k2, rel=1e-9) and xp_fit == pytest.approx(xp, rel=1e-8)
+
+
+def test_mode2_fit_shifted_refuses_a_rising_profile():
+    xi = np.arange(1, 6) / 100.0
+    assert all(math.isnan(v) for v in cracks.mode2_fit_shifted(xi, 0.1 + xi))

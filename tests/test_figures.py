@@ -1,6 +1,5 @@
-"""Figure code: the Mode II fit against an exact field, the numbers the figures plot against
-independent computations, and `parslip figures` / `parslip compare` writing their files."""
-import math
+"""Figure code: the numbers the figures plot against independent computations, and `parslip figures` /
+`parslip compare` writing their files."""
 import os
 
 import numpy as np
@@ -9,19 +8,6 @@ import pytest
 import parslip
 from parslip.plot import figures
 from parslip.cli import analysis_cmds, main
-
-
-@pytest.mark.parametrize("k2,xp", [(0.3, 0.02), (-0.05, 0.005), (1.7, 0.11)])
-def test_mode2_fit_recovers_an_exact_square_root_field(k2, xp):
-    xi = np.arange(1, 9) / 100.0                        # eight sites ahead, l = 100 a
-    sigma = k2 / np.sqrt(2 * np.pi * (xi + xp))
-    k_fit, xp_fit = figures.mode2_fit(xi, sigma)
-    assert k_fit == pytest.approx(k2, rel=1e-9) and xp_fit == pytest.approx(xp, rel=1e-8)
-
-
-def test_mode2_fit_refuses_a_rising_profile():
-    xi = np.arange(1, 6) / 100.0
-    assert all(math.isnan(v) for v in figures.mode2_fit(xi, 0.1 + xi))
 
 
 def test_figure_names_match_the_command_line():

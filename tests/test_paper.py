@@ -9,6 +9,8 @@ import pytest
 from helpers import DT, NS, blank, draw
 from parslip.studies.paper import claims as cl
 from parslip.studies.paper import measures as m
+from parslip.analysis.fronts import crack_speed, crossing_time, first_break_frame, peak_speed, section_width
+from parslip.analysis.slip import front_slip, passage_slip, peak_slip_velocity, slip_share_in_passages
 from parslip.analysis.results import Run
 
 DX = 1 / NS
@@ -242,13 +244,13 @@ def test_crack_crossing_rebond_and_unevenness():
         back = end + 10 + (40 if 20 <= s <= 24 else 0)
         it[back:, s] = 1
     run = as_run(iface, mode="shear", v0=1e-4)
-    assert m.crossing_time(run) == pytest.approx(57 * DT)
+    assert crossing_time(run) == pytest.approx(57 * DT)
     assert m.rebond_after_crossing(run) == pytest.approx(10 * DT)
     assert m.broken_share_at_crossing(run) == 1.0
     # detachment per site: (end + 10 - (100 + s)) frames, 40 more at 20-24; the median site is 29.5 frames
     d = np.array([end + 10 - (100 + s) + (40 if 20 <= s <= 24 else 0) for s in range(NS)])
     assert m.rebond_unevenness(run) == pytest.approx(d.max() / np.median(d))
-    assert m.crack_speed(run) == pytest.approx(DX / DT) and m.peak_speed(run) == pytest.approx(DX / DT)
+    assert crack_speed(run) == pytest.approx(DX / DT) and peak_speed(run) == pytest.approx(DX / DT)
     pulse = pulses([100], +1, 1, width=3, nf=400)
     assert m.rebond_after_crossing(pulse) < 0
 
@@ -275,10 +277,10 @@ def test_front_slip_is_bounded_by_the_neighbouring_fronts_not_the_record():
     a1, a2, a3 = 100 + s, 500 + s, 900 + s
     expect = 0.008 + 1e-4 * ((a2 + a3) // 2 - (a1 + a2) // 2)
     assert run.fronts()[1].tip["du"][s] == pytest.approx(expect)
-    assert m.front_slip(run, 1) == pytest.approx(0.008 + 1e-4 * 400, rel=0.01)
-    assert math.isnan(m.front_slip(run, 2))
-    assert m.median_front_slip(run, 3) == pytest.approx(m.front_slip(run, 1))
-    jump = m.passage_slip(run, 1)
+    assert front_slip(run, 1) == pytest.approx(0.008 + 1e-4 * 400, rel=0.01)
+    assert math.isnan(front_slip(run, 2))
+    assert m.median_front_slip(run, 3) == pytest.approx(front_slip(run, 1))
+    jump = passage_slip(run, 1)
     assert 0.008 < jump < 0.008 + 1e-4 * (NS + 5 + 10)
 
 
@@ -287,7 +289,7 @@ def test_slip_per_pulse_first_excess_and_spread():
     for i, k0 in enumerate((100, 300, 500, 700, 900, 1100)):
         draw(iface, k0, 0, +1, 2, 2, 0.015 if i == 0 else 0.01)
     run = as_run(iface)
-    assert m.front_slip(run, 1) == pytest.approx(0.01)
+    assert front_slip(run, 1) == pytest.approx(0.01)
     assert m.first_front_excess(run) == pytest.approx(1.5)
     assert m.slip_spread(run) == pytest.approx(0.0, abs=1e-12)
     assert m.median_front_slip(run) == pytest.approx(0.01)
@@ -301,13 +303,13 @@ def test_slip_share_in_passages_and_slip_velocity_contrast():
     for k0 in (100, 300, 500, 700):
         draw(iface, k0, 0, +1, 2, 2, 0.01)
     run = as_run(iface)
-    assert m.slip_share_in_passages(run, 0.5) == pytest.approx(1.0)
+    assert slip_share_in_passages(run, 0.5) == pytest.approx(1.0)
     assert m.passage_contrast(run, 0.35) == math.inf             # no slip at all outside the passages
     iface["ux"] += 1e-5 * np.arange(nf)[:, None]
     run = as_run(iface)
     s = int(np.argmin(np.abs(iface["x"] - 0.5)))
     total = iface["ux"][-1, s] - iface["ux"][0, s]
-    share = m.slip_share_in_passages(run, 0.5)
+    share = slip_share_in_passages(run, 0.5)
     assert 0.04 / total < share < 1.0
     assert m.passage_contrast(run, 0.35) > 3
 
@@ -318,7 +320,7 @@ def test_slip_velocity_peaks_and_stationary_far_edge():
     draw(iface, 1300, 0, +1, 1, NS, 0.008, crack=True)
     run = as_run(iface, mode="shear", v0=1e-4)
     assert m.sharp_peaks(run) == math.inf                        # the record is flat but for the jumps
-    assert m.peak_slip_velocity(run, 0.35) == pytest.approx(0.008 / (2 * DT))   # central difference
+    assert peak_slip_velocity(run, 0.35) == pytest.approx(0.008 / (2 * DT))   # central difference
     assert m.same_slip_everywhere(run) == pytest.approx(1.0)
     assert m.stationary_before_arrival(run, 0.98) == pytest.approx(0.0)
     iface["ux"][:, -2] += np.where(np.arange(nf) < 1300 + NS - 2, 0.004 * np.arange(nf) / 1300, 0.0)
@@ -345,7 +347,7 @@ def test_interface_stress_profiles_before_the_first_break():
     iface["syy"] = np.tile(np.where(x < 0.03, 0.3, -0.1), (200, 1))      # tensile at the rear edge
     iface["intact"][50, 0] = 0
     run = as_run(iface)
-    assert m.first_break_frame(run) == 50
+    assert first_break_frame(run) == 50
     assert m.argmax_before_break(run, "syy") == pytest.approx(x[0])
     assert m.argmax_before_break(run, "sxy") == pytest.approx(x[int(np.argmax(np.sin(np.pi * x)))])
     edges = np.mean(iface["sxy"][49][(x < 0.1) | (x > 0.9)])
@@ -419,8 +421,8 @@ def test_section_width_is_the_median_interior_white_run():
     it[5, 0:2] = 0
     it[5, NS - 1] = 0
     run = as_run(iface)
-    assert m.section_width(run, 5 * DT) == 4.0
-    assert np.isnan(m.section_width(run, 0.0))
+    assert section_width(run, 5 * DT) == 4.0
+    assert np.isnan(section_width(run, 0.0))
 
 
 def test_pulse_count_includes_a_young_front_cut_short_by_the_record():

@@ -6,11 +6,12 @@ each a pure function of arrays plus a thin function of a run:
 route 1, ``contour_g``      the energy flux into a closed lattice contour (a square of half-side r) around the
                             tip, from one whole-lattice snapshot: G = (F - dE/dt - P_damp) / V (below);
 route 2, ``field_g``        the dynamic mode II singular field fitted to the interface shear traction ahead of
-                            the tip, tau(xi) = tau_0 + K_II / sqrt(2 pi xi), turned into G by the velocity
-                            function of the Born continuum (``mode2_compliance``);
+                            the tip, tau(xi) = tau_0 + K_II / sqrt(2 pi xi) (``mode2_fit``), turned into G by
+                            the velocity function of the Born continuum (``mode2_compliance``);
 ``gamma_sites``             Gamma, the energy the front's breaks released per unit length of its path.
 
-``process_zone`` gives the Palmer-Rice length Lambda both routes' distances are counted in
+``mode2_fit_shifted`` is the other K_II fit, the paper's appendix B form sigma = K_II / sqrt(2 pi (xi + x_p))
+(no offset), which the paper study and its mode II figure use.  ``process_zone`` gives the Palmer-Rice length Lambda both routes' distances are counted in
 (``palmer_rice_length``).  ``front_energy`` gives every scalar of one front at once.
 
 The per-front fields (``fronts.FIELDS``: ``parslip fronts --json``, ``front.<name>``), means over the front's
@@ -215,6 +216,29 @@ def mode2_fit(xi, tau):
         K = (dz * dt).sum(axis=-1) / (dz * dz).sum(axis=-1)
     K, tau0 = np.where(n >= 3, K, math.nan), np.where(n >= 3, tm - K * zm, math.nan)
     return (float(K), float(tau0)) if K.ndim == 0 else (K, tau0)
+
+
+def mode2_fit_shifted(xi, sigma) -> tuple[float, float]:
+    """(K_II, x_p) of sigma = K_II / sqrt(2 pi (xi + x_p)), the paper's appendix B form (no offset: the
+    singular field with its origin shifted by x_p), xi > 0 the distance ahead of the tip.
+
+    The model is linear in xi after a change of variable,
+        sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2,
+    so a straight-line least-squares fit of sigma^-2 on xi gives slope A and intercept B, K_II = sign(sigma)
+    sqrt(2 pi / A), x_p = B / A, over the points of the sign sigma has nearest the tip.  Units: xi and x_p
+    in one length unit (l in the paper study), K_II in sigma's unit times its square root.  (nan, nan) when
+    the profile does not fall off ahead of the tip (A <= 0) or has fewer than 2 such points."""
+    xi, sigma = np.asarray(xi, float), np.asarray(sigma, float)
+    if len(xi) < 2 or np.any(sigma == 0):
+        return math.nan, math.nan
+    sign = float(np.sign(sigma[np.argmin(xi)]))
+    keep = np.sign(sigma) == sign
+    if keep.sum() < 2:
+        return math.nan, math.nan
+    a, b = np.polyfit(xi[keep], 1.0 / sigma[keep] ** 2, 1)
+    if a <= 0:
+        return math.nan, math.nan
+    return sign * math.sqrt(2 * math.pi / a), b / a
 
 
 def field_g(K: float, v: float, kn: float, kt: float, rho: float = DENSITY) -> float:

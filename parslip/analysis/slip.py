@@ -6,6 +6,8 @@ measure is a function of the run (``analysis.results.Run``); no file access, no 
   front_slip(run, i)                the slip u front i carries (the catalogue's ``slip_u``), l
   passage_slip(run, i, margin)      the slip u that happens while front i passes, l (median over its sites)
   slip_share_in_passages(run, x)    the share of a site's slip that happens while its bond is broken
+  passage_frames(run)               site -> the frames every catalogued front reached it at
+  rebond_frame(intact, k, s)        the first frame at or after k where site s is bonded again
 
 Units: x and u in l, t in l/c_r, so slip velocities in c_r.
 """
@@ -46,13 +48,13 @@ def front_slip(run, front_index: int) -> float:
     return float(fr[front_index].slip_u) if front_index + 1 < len(fr) else math.nan
 
 
-def _rebond_frame(intact: np.ndarray, k: int, s: int) -> int:
+def rebond_frame(intact: np.ndarray, k: int, s: int) -> int:
     """First frame at or after k where site s is intact (the last frame if it never re-bonds)."""
     on = np.flatnonzero(intact[k:, s] == 1)
     return k + int(on[0]) if len(on) else intact.shape[0] - 1
 
 
-def _passage_frames(run) -> dict:
+def passage_frames(run) -> dict:
     """site -> sorted arrival frames of every catalogued front there."""
     out: dict[int, list[int]] = {}
     for f in run.fronts():
@@ -72,7 +74,7 @@ def passage_slip(run, front_index: int, margin: float = MARGIN) -> float:
     f = fr[front_index]
     intact, ux = run.interface["intact"], run.interface["ux"]
     m = int(round(margin / float(np.median(np.diff(t)))))
-    passes = _passage_frames(run)
+    passes = passage_frames(run)
     jumps = []
     for xx, k in zip(f.tip["x"], tip_frames(run, f)):
         s = _site(run, xx)
@@ -80,7 +82,7 @@ def passage_slip(run, front_index: int, margin: float = MARGIN) -> float:
         i = ks.index(k) if k in ks else int(np.argmin(np.abs(np.array(ks) - k)))
         k_lo = 0 if i == 0 else (ks[i - 1] + k) // 2
         k_hi = len(t) - 1 if i == len(ks) - 1 else (k + ks[i + 1]) // 2
-        jumps.append(ux[min(k_hi, _rebond_frame(intact, k, s) + m), s] - ux[max(k_lo, k - m), s])
+        jumps.append(ux[min(k_hi, rebond_frame(intact, k, s) + m), s] - ux[max(k_lo, k - m), s])
     return float(np.median(jumps)) if jumps else math.nan
 
 

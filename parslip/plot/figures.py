@@ -21,6 +21,8 @@ import os
 
 import numpy as np
 
+from ..analysis.cracks import mode2_fit_shifted
+
 log = logging.getLogger("parslip")
 
 YELLOW = "#f2c300"
@@ -217,29 +219,6 @@ def tip_profile(run, front, t: float, field: str = "sxy", sites: int = 8):
     return xi[ahead], run.interface[field][k, ahead]
 
 
-def mode2_fit(xi: np.ndarray, sigma: np.ndarray) -> tuple[float, float]:
-    """K_II and x_p of sigma = K_II / sqrt(2 pi (xi + x_p)) (appendix B), xi > 0 the distance ahead of the tip.
-
-    The model is linear in xi after a change of variable,
-        sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2,
-    so a straight-line least-squares fit of sigma^-2 on xi gives slope A and
-    intercept B, K_II = sign(sigma) sqrt(2 pi / A), x_p = B / A.  Units: xi and
-    x_p in l, sigma in rho c_r^2, K_II in rho c_r^2 l^(1/2).  Returns (nan, nan)
-    when the profile does not fall off ahead of the tip (A <= 0).
-    """
-    xi, sigma = np.asarray(xi, float), np.asarray(sigma, float)
-    if len(xi) < 2 or np.any(sigma == 0):
-        return math.nan, math.nan
-    sign = float(np.sign(sigma[np.argmin(xi)]))
-    keep = np.sign(sigma) == sign
-    if keep.sum() < 2:
-        return math.nan, math.nan
-    a, b = np.polyfit(xi[keep], 1.0 / sigma[keep] ** 2, 1)
-    if a <= 0:
-        return math.nan, math.nan
-    return sign * math.sqrt(2 * math.pi / a), b / a
-
-
 def mode2_table(run, n_fronts: int = 3) -> list[dict]:
     """Mode II fits of the first ``n_fronts`` fronts at the stress-figure times they are alive at
     (their own midpoint if none): rows of front, t, K_II, x_p, sigma_max."""
@@ -251,7 +230,7 @@ def mode2_table(run, n_fronts: int = 3) -> list[dict]:
             ts = [float(f.tip["t"][len(f.tip["t"]) // 2])]
         for t in ts:
             xi, s = tip_profile(run, f, t)
-            k2, xp = mode2_fit(xi, s)
+            k2, xp = mode2_fit_shifted(xi, s)
             rows.append({"front": i + 1, "t": float(run.times[run.frame_at(t)]), "K_II": k2, "x_p": xp,
                          "sigma_max": float(s[0]) if len(s) else math.nan})
     return rows

@@ -20,6 +20,8 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from ...analysis import slip
+from ...analysis.fronts import crack_speed, crossing_time, driven_edge, first_break_time, peak_speed, section_width
 from . import measures as measure
 
 AGREES, DISAGREES, NOT_MEASURED = "agrees", "disagrees", "not measured"
@@ -275,24 +277,24 @@ CLAIMS: list[Claim] = [
     # --- T0 (shear), Sec. 3.3 --------------------------------------------------------------
     Claim("shear_first", "T0 first break", "Sec. 3.3.3: \"the first breaking event occurs much later, at "
           "tc_r/l = 65.37\"", "65.37", "l/c_r", near(65.37, rel=0.02, why="2 %: the project's target for T0"), SHEAR_RUN,
-          lambda r: measure.first_break_time(r["shear"])),
+          lambda r: first_break_time(r["shear"])),
     Claim("shear_site", "T0 rupture nucleates at the rear edge", "Sec. 3.3: \"Rupture fronts nucleate at the left "
           "edge of the body\"", "0", "l", at_most(0.05, why=_EDGE), SHEAR_RUN, lambda r: measure.nucleation_site(r["shear"])),
     Claim("shear_crossing", "T0 first front crosses the contact by t = 66.50", "Sec. 3.3.3: \"these fast fronts "
           "rupture the entire interface ..., see the sigma_xy field at tc_r/l = 66.50\" (65.37 -> 66.50)", "1.13",
           "l/c_r", at_most(1.5, why="crossing at 0.7 c_r, the slow end of the paper's 0.7-1 c_r"), SHEAR_RUN,
-          lambda r: measure.crossing_time(r["shear"], 0)),
+          lambda r: crossing_time(r["shear"], 0)),
     Claim("shear_speed", "T0 first front at ~c_r past x_tip/l ~ 0.2", "Sec. 3.3.2: \"the fronts quickly "
           "accelerate to v ~ c_r ... fluctuation between 0.7c_r and c_r ... an artifact\"", "0.7-1", "c_r",
           between(0.7, 1.05, why="the paper's band, 5 % headroom for the frame cadence"), SHEAR_RUN,
-          lambda r: measure.crack_speed(r["shear"], 0)),
+          lambda r: crack_speed(r["shear"], 0)),
     Claim("shear_later_speed", "T0 later fronts reach c_r quickly too", "Sec. 3.3.2: \"All temporally sequential "
           "fronts reach the Rayleigh wave speed quickly, even as x_tip/l ~ 0.2\"", "0.7-1", "c_r (slower of "
           "fronts 2, 3)", between(0.7, 1.05, why="as for the first front"), SHEAR_RUN,
           lambda r: measure.later_crack_speeds(r["shear"])),
     Claim("shear_subshear", "T0 no supershear front", "Sec. 3.3.2: \"fronts cannot propagate at speeds faster "
           "than this---we do not observe any super-shear ruptures\"", "<= c_s = 1.10 c_r", "c_r",
-          at_most(1.1, why="c_s/c_r = 1.098 at nu = 0.2"), SHEAR_RUN, lambda r: measure.peak_speed(r["shear"], 0)),
+          at_most(1.1, why="c_s/c_r = 1.098 at nu = 0.2"), SHEAR_RUN, lambda r: peak_speed(r["shear"], 0)),
     Claim("shear_crack", "T0 re-attachment only after the front crossed (crack)", "Sec. 3.3.1: \"this process "
           "starts after the rupture has propagated the entire length of the interface\"", ">= 0",
           "l/c_r (first re-bond - crossing)", at_least(0.0, why="the order of two events"), SHEAR_RUN,
@@ -341,7 +343,7 @@ CLAIMS: list[Claim] = [
     Claim("push_stationary", "T- interface does not slip between pulses", "Sec. 3.4: \"between successive "
           "pulses, the interface remains stationary and there is no slip\"", "all slip in passages",
           "share of u at x/l = 0.5", at_least(0.8, why="80 %: the drive's creep v0 t between pulses is allowed"),
-          PUSH_RUN, lambda r: measure.slip_share_in_passages(r["push"], 0.5)),
+          PUSH_RUN, lambda r: slip.slip_share_in_passages(r["push"], 0.5)),
     Claim("push_no_net_v", "T- no net vertical displacement after a pulse", "Sec. 3.4: \"there is no net slip in "
           "the y direction and the bodies readhere\"", "0", "|Delta v| / Delta u", at_most(0.1, why="10 % of "
           "the slip"), PUSH_RUN, lambda r: measure.net_vertical_over_slip(r["push"])),
@@ -359,7 +361,7 @@ CLAIMS: list[Claim] = [
     Claim("crack_faster_slip", "T0 slip velocity peaks above T-'s", "Sec. 3.4: \"pulses having a lower and more "
           "gradual slip velocity than crack-like fronts with a sudden, sharp jump\"", "> 1",
           "peak u-dot T0 / T- at x/l = 0.35", at_least(2.0, why="a factor 2"), ("push", "shear"),
-          lambda r: measure.peak_slip_velocity(r["shear"], 0.35) / measure.peak_slip_velocity(r["push"], 0.35)),
+          lambda r: slip.peak_slip_velocity(r["shear"], 0.35) / slip.peak_slip_velocity(r["push"], 0.35)),
     # --- larger contacts, Sec. 4.4 -------------------------------------------------------------
     Claim("l300_push", "l = 300: T- still forward pulses from the rear edge", "Sec. 4.4: \"l=300 contacts point, "
           "retains similar qualitative behaviour for all loading conditions\"", "pulses from 0 toward 1",
@@ -396,12 +398,12 @@ def _fast_from_edge(run) -> float:
     fr = run.fronts()
     if not fr:
         return math.nan
-    return measure.crack_speed(run, 0) if abs(fr[0].nucleation_x - measure.driven_edge(run)) < measure.EDGE else 0.0
+    return crack_speed(run, 0) if abs(fr[0].nucleation_x - driven_edge(run)) < measure.EDGE else 0.0
 
 
 def _passage_ratio(runs) -> float:
-    push = [measure.passage_slip(runs["push"], i) for i in range(1, 6)]
-    shear = [measure.passage_slip(runs["shear"], i) for i in range(0, 3)]
+    push = [slip.passage_slip(runs["push"], i) for i in range(1, 6)]
+    shear = [slip.passage_slip(runs["shear"], i) for i in range(0, 3)]
     push, shear = [v for v in push if math.isfinite(v)], [v for v in shear if math.isfinite(v)]
     if not push or not shear:
         return math.nan
@@ -413,13 +415,13 @@ def _passage_ratio(runs) -> float:
 # claim key -> [(what the other reading is, measure on the runs)]
 ALTERNATIVES: dict[str, list[tuple[str, Callable[[dict], object]]]] = {
     "push_width": [("white runs in the constant-time section t c_r/l = 30 (the paper's own reading, Sec. 3.1.1)",
-                    lambda r: measure.section_width(r["push"], 30.0))],
+                    lambda r: section_width(r["push"], 30.0))],
     "pull_push_speed": [("each pulse's mean speed over its whole run, acceleration included",
                          lambda r: measure.speed_ratio(r["pull"], r["push"], how="mean"))],
     "slip_ratio": [("the jump while a front passes (passage_slip), without the creep between fronts",
                     _passage_ratio)],
     "push_stationary": [("the share at x/l = 0.98, near the far edge (Fig. 10a: 'more pronounced')",
-                         lambda r: measure.slip_share_in_passages(r["push"], 0.98))],
+                         lambda r: slip.slip_share_in_passages(r["push"], 0.98))],
     "push_same_speed": [("the first three pulses only", lambda r: measure.speed_spread(r["push"], 3))],
 }
 

@@ -16,17 +16,13 @@ import math
 
 import numpy as np
 
-from ...analysis.fronts import MAX_GAP
+from ...analysis.fronts import (MAX_GAP, MIN_SITES, accel_time, crack_speed, driven_edge, first_break_frame,
+                                tip_frames)
+from ...analysis.cracks import mode2_fit_shifted
+from ...analysis.slip import MARGIN, front_slip, passage_frames, passage_slip, rebond_frame, slip_velocity
 
 EDGE = 0.05          # l: a front "nucleates at the driven edge" within this distance of it
 STEADY = (0.1, 0.6)  # distance from the nucleation site (l) where pulses run at their steady speed
-MARGIN = 0.25        # l/c_r: a front's slip window starts this long before its tip arrives, ends this long
-                     # after the site re-bonds
-
-
-def driven_edge(run) -> float:
-    """x/l of the edge a run's drive loads first: 1 for pull, else 0."""
-    return 1.0 if run.mode == "pull" else 0.0
 
 
 # --- fronts at the driven edge ---------------------------------------------------------
@@ -37,7 +33,7 @@ def edge_fronts(run) -> list:
     return [f for f in run.fronts() if abs(f.nucleation_x - edge) < EDGE]
 
 
-def edge_nucleations(run, min_sites: int = 5, max_gap: float = MAX_GAP) -> list:
+def edge_nucleations(run, min_sites: int = MIN_SITES, max_gap: float = MAX_GAP) -> list:
     """Every front nucleated at the driven edge (``edge_fronts``), counting one cut short by the end of
     the record: a front with fewer than ``min_sites`` sites counts when its tip was still advancing
     within ``max_gap`` l/c_r of the last frame (it is young, not small)."""
@@ -91,18 +87,6 @@ def pulse_share(run) -> float:
     """Share of the edge fronts the catalogue calls pulses (bonds re-attached behind the tip)."""
     fr = edge_fronts(run)
     return float(np.mean([f.kind == "pulse" for f in fr])) if fr else math.nan
-
-
-def first_break_time(run) -> float:
-    from ...analysis.fronts import first_break
-    t, _ = first_break(run.interface)
-    return math.nan if t is None else t
-
-
-def first_break_frame(run) -> int | None:
-    broken = (run.interface["intact"] == 0).any(axis=1)
-    k = np.flatnonzero(broken)
-    return int(k[0]) if len(k) else None
 
 
 # --- speeds ------------------------------------------------------------------------------
@@ -159,14 +143,6 @@ def accel_x(run) -> float:
     return math.nan if not fr or fr[0].accel_x is None else float(fr[0].accel_x)
 
 
-def accel_time(front) -> float:
-    """t (l/c_r) at which a front's tip reached ``accel_x``; NaN if it never accelerated."""
-    if front.accel_x is None:
-        return math.nan
-    j = np.flatnonzero(front.tip["x"] == front.accel_x)
-    return float(front.tip["t"][j[0]]) if len(j) else math.nan
-
-
 def leading_accel_time(run) -> float:
     fr = edge_fronts(run)
     return accel_time(fr[0]) if fr else math.nan
@@ -203,38 +179,10 @@ def trailing_speedup(run, window: float = 3.0) -> float:
     return after / before if math.isfinite(before) and before > 0 and math.isfinite(after) else math.nan
 
 
-def crack_speed(run, front_index: int = 0, past: float = 0.2) -> float:
-    """Median |v|/c_r of a front once its tip is more than ``past`` l from its nucleation site."""
-    fr = run.fronts()
-    if len(fr) <= front_index:
-        return math.nan
-    f = fr[front_index]
-    v = _speeds(np.abs(f.tip["v"][np.abs(f.tip["x"] - f.nucleation_x) > past]))
-    return float(np.median(v)) if len(v) else math.nan
-
-
 def later_crack_speeds(run, fronts=(1, 2), past: float = 0.2) -> float:
     """The smallest ``crack_speed`` of fronts ``fronts`` (0-based), c_r; NaN if one is missing."""
     v = [crack_speed(run, i, past) for i in fronts]
     return min(v) if all(math.isfinite(x) for x in v) else math.nan
-
-
-def peak_speed(run, front_index: int = 0) -> float:
-    """Largest local |v|/c_r of a front (5-site fits)."""
-    fr = run.fronts()
-    return float(np.nanmax(np.abs(fr[front_index].tip["v"]))) if len(fr) > front_index else math.nan
-
-
-def crossing_time(run, front_index: int = 0, reach: float = 0.95) -> float:
-    """Time (l/c_r) a front takes from its nucleation to a tip ``reach`` l from its start across the
-    contact (the far edge for reach ~ 1); NaN if it never got there."""
-    fr = run.fronts()
-    if len(fr) <= front_index:
-        return math.nan
-    f = fr[front_index]
-    d = np.abs(f.tip["x"] - f.nucleation_x)
-    j = np.flatnonzero(d >= reach - 1e-9)
-    return float(f.tip["t"][j[0]] - f.nucleation_time) if len(j) else math.nan
 
 
 def live_pulses(run, t: float) -> int:
@@ -310,83 +258,7 @@ def width_jump(run, window: float = 3.0) -> float:
     return float(np.median(after) - np.median(before))
 
 
-def section_width(run, t: float) -> float:
-    """Median length, in lattice spacings a, of the interior runs of broken bonds in the frame nearest ``t``
-    (the paper's reading of a pulse width: a constant-time section of the space-time map).  Runs that touch
-    either edge of the contact are left out.  NaN when the frame has no interior run."""
-    broken = run.interface["intact"][run.frame_at(t)] == 0
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], broken.astype(np.int8), [0]))))
-    starts, ends = edges[::2], edges[1::2]
-    keep = (starts > 0) & (ends < len(broken))
-    return float(np.median(ends[keep] - starts[keep])) if keep.any() else math.nan
-
-
 # --- slip -------------------------------------------------------------------------------
-
-def _rebond_frame(intact: np.ndarray, k: int, s: int) -> int:
-    """First frame at or after k where site s is intact (the last frame if it never re-bonds)."""
-    on = np.flatnonzero(intact[k:, s] == 1)
-    return k + int(on[0]) if len(on) else intact.shape[0] - 1
-
-
-def tip_frames(run, front) -> np.ndarray:
-    """The frame that first shows each of the front's breaks: ``tip["frame"]`` (tips from the exact events
-    fall between frames), or the frame at each arrival time for a catalogue read off the frames."""
-    if "frame" in front.tip:
-        return np.asarray(front.tip["frame"], np.int64)
-    return np.array([run.frame_at(t) for t in front.tip["t"]], np.int64)
-
-
-def _passage_frames(run) -> dict:
-    """site -> sorted arrival frames of every catalogued front there."""
-    out: dict[int, list[int]] = {}
-    x = run.x
-    for f in run.fronts():
-        for xx, k in zip(f.tip["x"], tip_frames(run, f)):
-            s = int(np.argmin(np.abs(x - xx)))
-            out.setdefault(s, []).append(k)
-    return {s: sorted(v) for s, v in out.items()}
-
-
-def passage_slip(run, front_index: int, margin: float = MARGIN) -> float:
-    """Slip u (l) that happens while a front passes: at each site it crosses, u from ``margin`` before its
-    tip arrives to ``margin`` after the site re-bonds (the window clipped at the midpoints to the
-    neighbouring fronts' passages there); the median over the sites.  The jump a front makes, without
-    the creep of the bonded interface between fronts."""
-    fr = run.fronts()
-    if len(fr) <= front_index or "ux" not in run.interface:
-        return math.nan
-    f = fr[front_index]
-    it, ux, t = run.interface["intact"], run.interface["ux"], run.times
-    if len(t) < 2:
-        return math.nan
-    dtf = float(np.median(np.diff(t)))
-    m = int(round(margin / dtf))
-    passes = _passage_frames(run)
-    out = []
-    for xx, k in zip(f.tip["x"], tip_frames(run, f)):
-        s = int(np.argmin(np.abs(run.x - xx)))
-        ks = passes.get(s, [k])
-        i = ks.index(k) if k in ks else int(np.argmin(np.abs(np.array(ks) - k)))
-        lo = (ks[i - 1] + k) // 2 if i > 0 else 0
-        hi = (k + ks[i + 1]) // 2 if i + 1 < len(ks) else len(t) - 1
-        k0 = max(lo, k - m)
-        k1 = min(hi, _rebond_frame(it, k, s) + m)
-        out.append(ux[k1, s] - ux[k0, s])
-    return float(np.median(out)) if out else math.nan
-
-
-def front_slip(run, front_index: int) -> float:
-    """Slip u (l) one front carries (Sec. 3.4's Delta u): the catalogue's ``slip_u``, all the motion of each
-    site it crosses between the midpoints in time to the neighbouring fronts' passages there (from t = 0
-    for the first front, as the paper's Delta u of the first front is counted from the start).  For the
-    record's last front the window runs to the end of the record, so that front is not used (NaN):
-    its slip would grow with the run's length."""
-    fr = run.fronts()
-    if len(fr) <= front_index + 1:
-        return math.nan
-    return float(fr[front_index].slip_u)
-
 
 def median_front_slip(run, n: int = 4, first: int = 1) -> float:
     """Median ``front_slip`` of fronts ``first`` .. ``n`` - 1 (0-based): by default the interior ones, each
@@ -434,30 +306,6 @@ def lift_at_nucleation(run, within: float = 0.05) -> float:
     return float(np.median(v)) if len(v) else math.nan
 
 
-def slip_share_in_passages(run, x: float = 0.5, margin: float = 1.0) -> float:
-    """Share of the slip u at the site nearest ``x`` that happens while its bond is broken, give or take
-    ``margin`` l/c_r (Sec. 3.4: between pulses the interface does not slip)."""
-    s = int(np.argmin(np.abs(run.x - x)))
-    it, ux, t = run.interface["intact"][:, s], run.interface["ux"][:, s], run.times
-    if len(t) < 2:
-        return math.nan
-    total = ux[-1] - ux[0]
-    if total <= 0:
-        return math.nan
-    dtf = float(np.median(np.diff(t)))
-    m = int(round(margin / dtf))
-    broken = it == 0
-    near = np.convolve(broken.astype(int), np.ones(2 * m + 1, int), mode="same") > 0
-    du = np.diff(ux)
-    return float(du[near[1:]].sum() / total)
-
-
-def slip_velocity(run, x: float) -> tuple[np.ndarray, np.ndarray]:
-    """(t, du/dt) at the site nearest x: central differences of u in l over t in l/c_r, so in c_r."""
-    s = int(np.argmin(np.abs(run.x - x)))
-    return run.times, np.gradient(run.interface["ux"][:, s], run.times)
-
-
 def passage_contrast(run, x: float = 0.35, margin: float = 0.5) -> float:
     """Mean slip velocity at the site nearest ``x`` while its bond is broken (give or take ``margin``)
     over the mean outside those times (appendix C: u-dot rises as a pulse arrives, falls as it leaves)."""
@@ -474,17 +322,11 @@ def passage_contrast(run, x: float = 0.35, margin: float = 0.5) -> float:
     return float(np.mean(v[near])) / out if out > 0 else math.inf
 
 
-def peak_slip_velocity(run, x: float) -> float:
-    """Largest u-dot (c_r) at the site nearest ``x``."""
-    _, v = slip_velocity(run, x)
-    return float(np.max(v)) if len(v) else math.nan
-
-
 def stationary_before_arrival(run, x: float = 0.98) -> float:
     """u gained at the site nearest ``x`` before the first front reaches it, over the jump that front then
     makes (``passage_slip``): near 0 when the site stays put until then."""
     s = int(np.argmin(np.abs(run.x - x)))
-    passes = _passage_frames(run).get(s)
+    passes = passage_frames(run).get(s)
     if not passes:
         return math.nan
     ux = run.interface["ux"][:, s]
@@ -520,7 +362,7 @@ def same_slip_everywhere(run, points=(0.0, 0.35, 0.98)) -> float:
         if not len(hit):
             return math.nan
         k = int(tip_frames(run, f)[hit[0]])
-        k1 = min(len(run.times) - 1, _rebond_frame(it, k, s) + m)
+        k1 = min(len(run.times) - 1, rebond_frame(it, k, s) + m)
         vals.append(ux[k1, s] - ux[max(0, k - m), s])
     vals = np.abs(vals)
     return float(vals.max() / vals.min()) if vals.min() > 0 else math.inf
@@ -588,7 +430,7 @@ def mode2_r2(run, front_index: int, times, sites: int = 8) -> float:
     """Median R^2 of the Mode II fits (appendix B) of a front at ``times``: the straight line
     sigma^-2 = (2 pi / K^2) xi + 2 pi x_p / K^2 through the ``sites`` sites ahead of its tip.  A fit with
     K_II undefined (sigma^-2 not rising with xi) counts as R^2 = 0."""
-    from ...plot.figures import mode2_fit, tip_profile
+    from ...plot.figures import tip_profile
     fr = run.fronts()
     if len(fr) <= front_index:
         return math.nan
@@ -598,7 +440,7 @@ def mode2_r2(run, front_index: int, times, sites: int = 8) -> float:
         if not f.nucleation_time < t <= f.tip["t"][-1]:
             continue
         xi, s = tip_profile(run, f, t, "sxy", sites)
-        k2, _ = mode2_fit(xi, s)
+        k2, _ = mode2_fit_shifted(xi, s)
         if len(xi) < 3 or not math.isfinite(k2):
             out.append(0.0)
             continue
@@ -689,7 +531,7 @@ def rebond_unevenness(run, front_index: int = 0) -> float:
     d = []
     for xx, k in zip(f.tip["x"], tip_frames(run, f)):
         s = int(np.argmin(np.abs(run.x - xx)))
-        d.append(float(run.times[_rebond_frame(it, k, s)] - run.times[k]))
+        d.append(float(run.times[rebond_frame(it, k, s)] - run.times[k]))
     d = np.array(d)
     med = float(np.median(d))
     return float(d.max() / med) if med > 0 else math.nan

@@ -177,7 +177,7 @@ def make_runs(run_dir: str, roles=None, sets: dict | None = None, shrink: bool =
     """Every role's run (``ORDER``, or ``roles``) in ``run_dir``; returns (role -> parslip.open result on
     rank 0, what was made)."""
     from ...analysis.results import open as open_run
-    from .measures import first_break_time
+    from ...analysis.fronts import first_break_time
     rank0 = comm is None or comm.Get_rank() == 0
     roles = [r for r in ORDER if roles is None or r in roles]
     runs, made = {}, []
