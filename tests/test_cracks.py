@@ -233,7 +233,8 @@ def drawn_crack_run(K=0.02, tau0=0.01, kx=0.5):
     it["sxy"] = np.where(xi > 0, tau0 + K / np.sqrt(2 * math.pi * np.maximum(xi, 1e-9)), 0.0)
     it["kx"] = np.full(NS, kx)
     scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
-             "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883, "interface.kx": kx}
+             "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883, "interface.kx": kx,
+             "lattice.top_rows": 100, "lattice.bottom_rows": 100}
     return Run.from_arrays(it, scene, {"c_r": 1.0, "l": float(NS)}), energy
 
 
@@ -253,6 +254,9 @@ def test_the_crack_fields_of_a_drawn_front():
     d = f.to_dict()
     for name in ("G_contour_inner", "G_contour_outer", "G_field", "Gamma", "Gamma_source"):
         assert FIELDS[name].source == "analysis.cracks" and name in d
+    thin = type(run).from_arrays(run.interface, {**run.scene, "lattice.top_rows": 10}, run.attrs)
+    assert thin.fronts()[0].G_field is None                     # 10 rows < 3 Lambda: no near-tip field to fit
+    assert thin.fronts()[0].Gamma == pytest.approx(f.Gamma, rel=1e-12)
     bare = type(run).from_arrays(run.interface)                 # no material: nothing to measure G with
     assert all(bare.fronts()[0].field(name) is None for name in ("G_field", "Gamma", "G_contour_inner"))
 

@@ -559,13 +559,27 @@ def g_contour_outer(run, front) -> float | None:
 @front_field("G_field", "m c_r^2/a", "G by route 2 (analysis.cracks): G = H(v) K_II^2 / 2 (H the Born "
              "continuum's mode II velocity function at the stretch's speed), K_II from tau = tau_0 + K_II / "
              f"sqrt(2 pi xi) fitted to /interface/sxy at {FIT_WINDOW[0]:g}-{FIT_WINDOW[1]:g} Lambda ahead of the "
-             "tip; mean over the interface frames inside the steady stretch; null without sxy or where no frame "
-             "holds a whole window on the contact")
+             "tip; mean over the interface frames inside the steady stretch; null without sxy, where no frame "
+             "holds a whole window on the contact, or where a block is thinner than the window's far end (no "
+             "near-tip field to fit)")
 def g_field(run, front) -> float | None:
-    """Route 2's G (``field_g_run``), mean over the stretch's frames."""
-    if not measurable(run, front) or "sxy" not in run.interface:
+    """Route 2's G (``field_g_run``), mean over the stretch's frames; null where a block is thinner than the
+    fit window reaches (``field_resolved``)."""
+    if not measurable(run, front) or "sxy" not in run.interface or not field_resolved(run):
         return None
     return _mean([r["G"] for r in _memo(front, "field", lambda: field_g_run(run, front))])
+
+
+def field_resolved(run, window: tuple = FIT_WINDOW) -> bool:
+    """Whether the near-tip field route 2 fits can exist: each elastic block at least window[1] Lambda tall
+    (a, one row per a), as tall as the far end of the fit window.  On a thinner block (the paper's 10 rows
+    against Lambda ~ 17 a) the traction ahead of the tip is the block's beam response, not a crack's singular
+    field, and a K_II fitted to it is no measure of G."""
+    s, reach = run.scene, window[1] * process_zone(run)
+    heights = [s.get("lattice.top_rows", 0)]
+    if s.get("lattice.substrate", "elastic") == "elastic":
+        heights.append(s.get("lattice.bottom_rows", 0))
+    return min(heights) >= reach
 
 
 def _gamma(run, front) -> dict | None:
