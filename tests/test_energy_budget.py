@@ -1,0 +1,129 @@
+"""The energy budget of a driven run in damped Verlet's discrete energy, computed step by step from outside
+the engine: the discrete forms a budget kept inside the loop must use, and the proof that they close.
+
+For Verlet, u(n+1) - 2 u(n) + u(n-1) = dt^2 (F(u(n)) + f(n)) - (drag) with bonds K(n) (set at step n,
+before the forces), the staggered energy
+
+    H(n+1/2) = |u(n+1) - u(n)|^2 / (2 dt^2) + 2 V((u(n) + u(n+1))/2) - V(u(n))/2 - V(u(n+1))/2
+
+(V the bonds' energy with the bonds K(n), without the load) changes over a step by exactly
+
+    f(n) . (u(n+1) - u(n-1)) / 2                        the work of an external force (drive, F_N)
+    - zeta |u(n+1) - u(n-1)|^2 / (4 dt)                  the body drag ("absolute")
+    - g/2 (u(n) - u(n-1))^T K_b (u(n+1) - u(n-1))        the bonds' dashpots ("bonds", g = zeta/(k_n dt) per block)
+    - [E(K(n-1)) - E(K(n))] at (u(n-1), u(n))           the bonds a step broke or re-formed
+
+where E is the staggered elastic term.  The last one is not the stored energy 1/2 k d(n)^2 the events carry
+but 1/2 d(n-1) k d(n): they differ by O(v dt) per event.
+"""
+import numpy as np
+import pytest
+
+from helpers import SMALL, scene
+from parslip.engine.reference_engine import Simulation as ReferenceSimulation
+from parslip.engine.simulation import Simulation
+from parslip.scene.derive import derive
+
+
+class _Energies:
+    """V(u) without the load, from the reference implementation's energy kernel, with the engine's bonds."""
+
+    def __init__(self, sim):
+        over = dict(sim.setup.scene)
+        over["time.damping"] = "absolute"      # the reference has only the body drag; V does not depend on it
+        self.ref = ReferenceSimulation(derive(over))
+        self.sim = sim
+        assert np.array_equal(self.ref.layout.nodes["gid"][:self.ref.n_owned], sim.state.gid)
+
+    def sync_bonds(self):
+        ref = self.ref
+        ref.partner[ref.own_sites] = self.sim.state.owned_partner()
+        ref.x0[ref.own_sites] = self.sim.state.owned_x0()
+
+    def V(self, u, bulk_only=False):
+        ref = self.ref
+        keep = ref.partner.copy()
+        if bulk_only:
+            ref.partner[:] = -1
+        ref.u[:ref.n_owned] = u
+        e = ref.energy_per_node(0.0).sum()
+        ref.partner[:] = keep
+        return e
+
+    def elastic(self, un, uo):
+        """The staggered elastic term 2 V(mid) - V(un)/2 - V(uo)/2 = 1/2 (uo - r)^T K (un - r)."""
+        return 2 * self.V(0.5 * (un + uo)) - 0.5 * self.V(un) - 0.5 * self.V(uo)
+
+    def bulk_bilinear(self, a, b, mask):
+        """a^T K_bulk b over the bonds of the nodes in ``mask`` (one block): V(a + b) - V(a) - V(b)."""
+        a = np.where(mask[:, None], a, 0.0)
+        b = np.where(mask[:, None], b, 0.0)
+        return self.V(a + b, True) - self.V(a, True) - self.V(b, True)
+
+
+def _budget(sim, steps):
+    """Run ``steps`` steps from the drive's start; returns the budget's terms (m c^2) summed over them:
+    the works, the damping, ``state`` the change of H, ``bonds`` the staggered energy of the bonds broken
+    less that of those formed, ``stored`` the same at u(n) alone (what the events carry), ``residual``."""
+    st = sim.setup
+    sim.run(until=st.n_drive_start)
+    en = _Energies(sim)
+    en.sync_bonds()
+    dt = st.dt
+    zeta = st.damping.zeta
+    form = st.damping.form
+    blocks = en.ref.block[:en.ref.n_owned]
+    kns = en.ref.kn
+    fext = en.ref.fext[:en.ref.n_owned] * sim.load_factor()
+    kin = lambda un, uo: 0.5 * np.sum((un - uo) ** 2) / dt ** 2
+    un, uo = sim.u, sim.u_prev
+    h0 = kin(un, uo) + en.elastic(un, uo)
+    t = dict(work_drive=0.0, work_normal=0.0, damping=0.0, bonds=0.0, stored=0.0)
+    counts = sim.counters.copy()
+    for _ in range(steps):
+        sim.step()
+        new = sim.u
+        if not np.array_equal(sim.counters, counts):       # a bond broke or re-formed at step n
+            before, stored = en.elastic(un, uo), en.V(un)
+            en.sync_bonds()
+            t["bonds"] += before - en.elastic(un, uo)
+            t["stored"] += stored - en.V(un)
+            counts = sim.counters.copy()
+        span = new - uo
+        t["work_drive"] += 0.5 * float(sim.checkpoint_parts()["drive_force"] @ span[:, 0])
+        t["work_normal"] += 0.5 * float(np.sum(fext * span))
+        if form == "absolute":
+            t["damping"] += zeta * np.sum(span ** 2) / (4 * dt)
+        else:
+            for b in (0, 1):
+                g = zeta / (kns[b] * dt)
+                t["damping"] += 0.5 * g * en.bulk_bilinear(un - uo, span, blocks == b)
+        uo, un = un, new
+    h1 = kin(un, uo) + en.elastic(un, uo)
+    t["state"] = h1 - h0
+    t["residual"] = t["work_drive"] + t["work_normal"] - t["state"] - t["damping"] - t["bonds"]
+    return t
+
+
+@pytest.mark.parametrize("mode", ["push", "pull", "shear"])
+@pytest.mark.parametrize("form", ["absolute", "bonds"])
+def test_budget_closes(mode, form):
+    """Drive work + load work = change of H + damping + bonds broken/formed, to 1e-9 of the drive work,
+    over a drive that breaks bonds (each term checked to act)."""
+    sim = Simulation(derive(scene(**{**SMALL, "drive.mode": mode, "time.damping": form, "drive.v0": 0.05})))
+    t = _budget(sim, 1200)
+    assert t["work_drive"] > 0 and t["damping"] > 0
+    assert sim.counters[0] > 0 and t["bonds"] != 0.0
+    assert abs(t["residual"]) < 1e-9 * t["work_drive"], t
+    # The stored energies 1/2 k d(n)^2 the events carry leave O(v dt) per event unexplained: far above 1e-6.
+    assert abs(t["residual"] + t["bonds"] - t["stored"]) > 1e-4 * t["work_drive"], t
+
+
+def test_budget_closes_at_half_step():
+    """The same closure at dt/2: the discrete forms are exact, not first order in dt."""
+    st = derive(scene(**{**SMALL, "drive.mode": "shear", "drive.v0": 0.05}))
+    st2 = derive(scene(**{**SMALL, "drive.mode": "shear", "drive.v0": 0.05, "time.dt": 0.5 * st.dt}))
+    sim = Simulation(st2)
+    t = _budget(sim, 2400)
+    assert sim.counters[0] > 0 and t["damping"] > 0
+    assert abs(t["residual"]) < 1e-9 * t["work_drive"], t
