@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from .memory import predict
-from ..io.contract import FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS
+from ..io.contract import EVENT_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS
 from ..model.lattice import BOTTOM, Lattice
 from .schema import SCHEMA
 
@@ -51,8 +53,9 @@ def bulk_cells(lat: Lattice) -> int:
                for i, b in enumerate(lat.blocks) if lat.numbered[i] and b.rows)
 
 
-# Bytes of one bond event in the run file: step 8, time 8, site 4, kind 1, partner 4.
-EVENT_FILE_BYTES = 25
+# Bytes of one bond event in the run file: the sum over the contract's event datasets (step 8, time 8, site 4,
+# kind 1, partner 4, energy 8, traction 8), so a field added there counts here too.
+EVENT_FILE_BYTES = sum(np.dtype(dtype).itemsize for dtype, _ in EVENT_DATASETS.values())
 
 
 def output_bytes(st) -> dict:
