@@ -18,7 +18,8 @@ import dataclasses
 import numpy as np
 
 from .memory import predict
-from ..io.contract import EVENT_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS
+from ..io.contract import (EVENT_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS,
+                           STATUS_BYTES)
 from ..model.lattice import BOTTOM, Lattice
 from .schema import SCHEMA
 
@@ -64,8 +65,9 @@ def output_bytes(st) -> dict:
     interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame for each
     of time, step, friction_force, drive_force and mu + 8 per site for each of x, kx, ky, delta_b; snapshots: each holds every node
     (72 B) and every bond as a line cell (27 B: bulk bonds and one per interface site) and a few offsets.
-    The bond events add ``EVENT_FILE_BYTES`` per event on top: how many the run makes depends on its
-    physics, so they are not in the total.
+    The run's status (``STATUS_BYTES``, written whole when the file is made) is in the total; the bond
+    events add ``EVENT_FILE_BYTES`` per event on top: how many the run makes depends on its physics, so
+    they are not in the total.
     """
     lat = st.lattice
     frames, sites = st.n_frames, lat.n_top_sites
@@ -74,7 +76,7 @@ def output_bytes(st) -> dict:
     cells = bulk_cells(lat) + sites
     snaps = st.n_snapshots * (lat.n_nodes * SNAPSHOT_NODE_BYTES + cells * SNAPSHOT_CELL_BYTES
                               + SNAPSHOT_FIXED_BYTES)
-    return {"interface": iface, "snapshots": snaps, "total": iface + snaps}
+    return {"interface": iface, "snapshots": snaps, "total": iface + snaps + STATUS_BYTES}
 
 
 def integrated_nodes(lat: Lattice) -> int:
