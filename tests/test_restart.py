@@ -173,5 +173,10 @@ def test_a_checkpoint_written_by_an_earlier_version_still_restarts(tmp_path):
     assert attrs["status"] == "complete"
     names = [n for n in want if n.startswith("interface/")]
     assert "interface/events/kind" in names and len(want["interface/time"]) > 100
+    old = 28                          # the events the old file held: its version recorded no energy or traction
     for name in names:
+        if name in ("interface/events/energy", "interface/events/traction"):
+            assert np.isnan(got[name][:old]).all(), name          # not known: NaN, never a made-up value
+            assert got[name][old:].tobytes() == want[name][old:].tobytes(), name
+            continue
         assert got[name].tobytes() == want[name].tobytes(), name

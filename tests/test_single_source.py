@@ -143,7 +143,9 @@ for name in law.BONDS.names:
 sim.run(until=120)
 again.run(until=120)
 assert np.array_equal(again.u, sim.u) and np.array_equal(t.iface.bonds, s.iface.bonds), "the restart diverged"
-print("drawn row ok", comm.Get_rank(), int((~own).sum()))
+ranks = comm.gather(comm.Get_rank(), root=0)      # one line, from rank 0: two ranks' prints can interleave
+if comm.Get_rank() == 0:
+    print("drawn row ok on ranks", *ranks, flush=True)
 """
 
 
@@ -157,5 +159,4 @@ def test_a_drawn_bond_row_travels_checkpoints_and_restarts(tmp_path):
     p = run_limited([WHEEL_MPIEXEC, "-n", "2", sys.executable, str(script), str(tmp_path / "c.ckpt.h5")],
                     env=cli_env(), timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
-    assert sorted(line.split()[3] for line in p.stdout.splitlines() if line.startswith("drawn row ok")) == \
-        ["0", "1"]
+    assert "drawn row ok on ranks 0 1" in p.stdout, p.stdout[-2000:]
