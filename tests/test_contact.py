@@ -35,7 +35,8 @@ def test_the_contact_force_is_the_documented_one_and_conserves_momentum():
     tx[PAD, j], ty[PAD, j] = 0.3, -0.55                   # slid 0.3 a, sunk below the rest gap
     bx[br, i], by[br, i] = 0.05, 0.1                       # the surface tilted
     bx[br, i + 1], by[br, i + 1] = -0.1, -0.2
-    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], bx[br], it)
+    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], ty[PAD], bx[br], by[br], it, np.zeros((2, len(tx[PAD]))),
+              np.zeros((2, len(tx[PAD]))))
     d0 = sim.setup.law.delta0
     p0 = np.array([col + bx[br, i], by[br, i]])            # substrate sites at y = 0 (top site at rest: y = delta0)
     p1 = np.array([col + 1 + bx[br, i + 1], by[br, i + 1]])
@@ -52,7 +53,8 @@ def test_the_contact_force_is_the_documented_one_and_conserves_momentum():
     total = np.array([it.ext_x[j] + it.exb_x[i] + it.exb_x[i + 1], it.ext_y[j] + it.exb_y[i] + it.exb_y[i + 1]])
     assert np.all(np.abs(total) < 1e-14)
     ty[PAD, j] = 0.3                                       # lifted clear of the surface: no force
-    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], bx[br], it)
+    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], ty[PAD], bx[br], by[br], it, np.zeros((2, len(tx[PAD]))),
+              np.zeros((2, len(tx[PAD]))))
     assert it.ext_x[j] == 0 and it.ext_y[j] == 0
 
 

@@ -50,7 +50,8 @@ from numba import njit
 
 from ..model.drive import DRIVE_SPRING, DRIVE_X, DRIVE_XY  # noqa: F401  (the drive word's bits, ``model.drive``)
 from ..parallel.exchange import complete, post, progress, reduce_max
-from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, NO_DOWN, NODES, PAD, ROWS
+from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, MASKED, NO_DOWN, NO_UP, NODES, PAD, ROWS
+from .kernels import budget as bg
 from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
@@ -69,7 +70,14 @@ Schedule = namedtuple("Schedule", "tasks ptr")
 Drive = namedtuple("Drive", "drive0 index force")
 # Interface frame buffer: ``cap`` frames of the OWNED top sites (``kernels.interface.record``), the drive
 # force of each OWNED driven node, the step of each frame, and the cursor [C_BASE, C_COUNT, C_LAST].
-Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive step cursor")
+Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy step cursor")
+# The energy budget's running totals on one rank (``kernels.budget``), each an array [2, units] of pairs
+# (hi, lo): damp_b, damp_t per column of each block; work per driven slot; broken, formed per interface
+# site (local column of the block's interface row).  base [2, N_TERMS]: what a restart carried over (rank 0);
+# prev [2, slots]: each driven slot's u(n-1) (x, y).  Scalars: sd = zeta/(4 dt) with the body drag (else 0;
+# c^2/a^2), inv_g[block] = 1/g of the bonds' dashpots (``model.damping.rate_gain``; 0 without),
+# inv_cf = 1/C (c^2/a^2), inv_2dt2 = 1/(2 dt^2) (c^2/a^2).
+Budget = namedtuple("Budget", "damp_b damp_t work broken formed base prev sd inv_g inv_cf inv_2dt2")
 # What the loop reports: flags (this rank's first problem), gflags (their MAX over the ranks), timers
 # (ns per phase), beat (BEAT_STEP: the step the loop last passed, read by the monitor thread).
 Diag = namedtuple("Diag", "flags gflags timers beat")
@@ -135,7 +143,7 @@ def _flag(flags, bit, step, block, row, col, value):
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm):
+def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm, acc, bud):
     """Drive node (r, j) of the driven face, once it has had its free update u(n+1) in ``px``.
 
     Prescribed (DRIVE_SPRING unset): its x becomes drive0 + v0 (t(n+1) - t_drive); with KEEP_FORCE keep the
@@ -143,68 +151,101 @@ def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm):
     f = k_s (x_loader(n) - u_x(n)) from a rigid loader at x_loader(n) = drive0 + v0 (t(n) - t_drive), added
     as any force is, u(n+1) += C f; KEEP_FORCE keeps f.  With DRIVE_XY its y stays where it was
     (u_y(n+1) = u_y(n): held since the drive started).  A node of the face outside ``drive.rows`` has no
-    slot (index -1) and is left free."""
+    slot (index -1) and is left free.
+
+    The budget: the drive's work f . (u(n+1) - u(n-1))/2 (with the force that holds y, if held) goes to
+    the slot's total, and the body drag the kernel counted on the free update is corrected to the
+    node's final u(n+1) (``kernels.budget``); ``bud.prev`` holds the slot's u(n-1)."""
     slot = drive.index[r, j]
     if slot < 0:
         return
+    xf, yf = px[r, j], py[r, j]
     if drive_on & DRIVE_SPRING:
         f = prm.spring * (drive.drive0[r, j] + (shift - prm.v0dt) - cx[r, j])
         px[r, j] += prm.cf * f
-        if drive_on & KEEP_FORCE:
-            drive.force[slot] = f
     else:
         target = drive.drive0[r, j] + shift
-        if drive_on & KEEP_FORCE:
-            drive.force[slot] = (target - px[r, j]) * prm.inv_cf
+        f = (target - xf) * prm.inv_cf
         px[r, j] = target
+    if drive_on & KEEP_FORCE:
+        drive.force[slot] = f
+    fy = 0.0
     if drive_on & DRIVE_XY:
         py[r, j] = cy[r, j]
+        fy = (float(cy[r, j]) - float(yf)) * float(prm.inv_cf)
+    _drive_budget(slot, j, float(f), fy, float(xf), float(yf), float(px[r, j]), float(py[r, j]), float(cx[r, j]),
+                  float(cy[r, j]), prm.damped, acc, bud)
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _drive_budget(slot, j, fx, fy, xf, yf, x1, y1, x, y, damped, acc, bud):
+    """A driven node's share of the budget (``_drive``): free update (xf, yf), final (x1, y1), u(n) = (x, y)."""
+    x0, y0 = bud.prev[0, slot], bud.prev[1, slot]
+    bg.add(bud.work, slot, 0.5 * (fx * (x1 - x0) + fy * (y1 - y0)))
+    if damped:
+        free = (xf - x0) * (xf - x0) + (yf - y0) * (yf - y0)
+        bg.add(acc, j, bud.sd * (((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0)) - free))
+    bud.prev[0, slot] = x
+    bud.prev[1, slot] = y
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy):
-    """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y)."""
+def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy,
+          acc, bud):
+    """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y).  The
+    damping's dissipation goes to the block's column totals ``acc`` (``kernels.budget``)."""
     cf = prm.cf
     damped = prm.damped
     zero = like(0, cf)
+    sd = bud.sd
     for t in range(t0, t1):
         tk = tasks[t]
         r, j0, n, s = tk.row, tk.j0, tk.n, tk.s
         g = gy if tk.load else zero
         if tk.kind == FULL:
-            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped)
+            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, acc, sd)
         elif tk.extra:
             row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf,
-                     ex, ey, zero, g)
+                     ex, ey, zero, g, acc, sd)
         else:
             row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf,
-                     zeros, zeros, zero, g)
+                     zeros, zeros, zero, g, acc, sd)
         if tk.drive and drive_on:
             for j in range(j0, j0 + n):
-                _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm)
+                _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm, acc, bud)
+        if prm.rated:          # after the drive: the dashpots' work is taken on the node's final u(n+1)
+            mask = bg.ALL if tk.kind == FULL else (bg.NO_UP_MASK if tk.kind == NO_UP else bg.NO_DOWN_MASK)
+            bg.bonds_damping(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, mask,
+                             bud.inv_g[tk.block], bud.inv_cf, acc)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy):
+def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy, acc,
+           bud):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
     cf = prm.cf
     damped = prm.damped
     zero = like(0, cf)
+    sd = bud.sd
     for t in range(t0, t1):
         tk = tasks[t]
         r, j, s = tk.row, tk.j0, tk.s
         if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped)   # interior node, slab edge
+            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, acc, sd)  # slab edge
         else:
             fx = ex[j] if tk.extra else zero
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
-            node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy)
+            node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy,
+                        acc, sd)
         if tk.drive and drive_on:
-            _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm)
+            _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm, acc, bud)
+        if prm.rated:
+            bg.bonds_damping(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, tk.mask,
+                             bud.inv_g[tk.block], bud.inv_cf, acc)
 
 
 @njit(cache=True, _nrt=False)
-def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy):
+def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
     move the halo messages halfway through (``progress``, a no-op on one rank)."""
     tasks = sched.tasks
@@ -214,18 +255,18 @@ def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, sh
     # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
     if pb[NODES] > pb[ROWS]:
         _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-              iface.exb_y, iface.zeros, drive, 0, shift, gy)
+              iface.exb_y, iface.zeros, drive, 0, shift, gy, bud.damp_b, bud)
     if phase == LATE:
         progress(plan)
     if pb[END] > pb[NODES]:
         _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-               iface.exb_y, drive, 0, shift, gy)
+               iface.exb_y, drive, 0, shift, gy, bud.damp_b, bud)
     if pt[NODES] > pt[ROWS]:
         _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
-              iface.ext_y, iface.zeros, drive, drive_on, shift, gy)
+              iface.ext_y, iface.zeros, drive, drive_on, shift, gy, bud.damp_t, bud)
     if pt[END] > pt[NODES]:
         _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
-               iface.ext_y, drive, drive_on, shift, gy)
+               iface.ext_y, drive, drive_on, shift, gy, bud.damp_t, bud)
 
 
 @njit(cache=True, _nrt=False)
@@ -282,7 +323,7 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
 
 
 @njit(cache=True, _nrt=False)
-def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag):
+def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
     """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1); ``n1`` is where the
     call that takes this step ends."""
     n_ds = prm.n_drive_start
@@ -303,7 +344,8 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag):
     t0 = now_ns(clk) if timed else 0
     if prm.has_iface:
         br = prm.brow
-        ik.update(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], nxt.tx[PAD], nxt.bx[br], iface)
+        ik.update(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], nxt.tx[PAD], nxt.ty[PAD], nxt.bx[br],
+                  nxt.by[br], iface, bud.broken, bud.formed)
         if iface.reach[0] >= 0:
             _flag(flags, FLAG_REACH, n, 1, 0, iface.reach[0], 0.0)
             iface.reach[0] = -1
@@ -315,11 +357,11 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag):
         rate_field(cur.tx, cur.ty, nxt.tx, nxt.ty, z.tx, z.ty, K[1, K_RATE])
         src = z
     t1 = now_ns(clk) if timed else 0
-    _tasks(EARLY, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
+    _tasks(EARLY, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud)
     t2 = now_ns(clk) if timed else 0
     err = post(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     t3 = now_ns(clk) if timed else 0
-    _tasks(LATE, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy)
+    _tasks(LATE, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud)
     t4 = now_ns(clk) if timed else 0
     err |= complete(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     if timed:
@@ -335,7 +377,56 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag):
 
 
 @njit(cache=True, _nrt=False)
-def _record(n, cur, prm, iface, drive, frames, tm):
+def _budget_start(cur, old, drive, bud):
+    """The budget's totals start with the drive (step n_drive_start): zero (with what a restart before it
+    carried over), and each driven slot's u(n-1)."""
+    for acc in (bud.damp_b, bud.damp_t, bud.work, bud.broken, bud.formed, bud.base):
+        acc[:, :] = 0.0
+    idx = drive.index
+    for r in range(idx.shape[0]):
+        for j in range(idx.shape[1]):
+            slot = idx[r, j]
+            if slot >= 0:
+                bud.prev[0, slot] = old.tx[r, j]
+                bud.prev[1, slot] = old.ty[r, j]
+
+
+@njit(cache=True, _nrt=False)
+def _energies(cur, old, sched, K, prm, iface, bud, out):
+    """This rank's share of the budget at a frame (``kernels.budget``), each term a pair in out[term]:
+    the running totals (with the base a restart carried over), then H(n - 1/2) and the load's sum."""
+    out[:, :] = 0.0
+    bg.total(bud.damp_b, out, bg.DAMPING)
+    bg.total(bud.damp_t, out, bg.DAMPING)
+    bg.total(bud.work, out, bg.W_DRIVE)
+    bg.total(bud.broken, out, bg.BROKEN)
+    bg.total(bud.formed, out, bg.FORMED)
+    for k in range(bg.N_TERMS):
+        bg.add(out, k, bud.base[0, k])
+        bg.add(out, k, bud.base[1, k])
+    tasks = sched.tasks
+    for t in range(tasks.shape[0]):
+        tk = tasks[t]
+        if tk.kind == MASKED:
+            mask = tk.mask
+        else:
+            mask = bg.ALL if tk.kind == FULL else (bg.NO_UP_MASK if tk.kind == NO_UP else bg.NO_DOWN_MASK)
+        if tk.block == 0:
+            cx, cy, ox, oy = cur.bx, cur.by, old.bx, old.by
+        else:
+            cx, cy, ox, oy = cur.tx, cur.ty, old.tx, old.ty
+        bg.row_energies(cx, cy, ox, oy, tk.row, tk.j0, tk.n, tk.s, K, tk.block, mask, bud.inv_cf, bud.inv_2dt2,
+                        out)
+        if tk.load:
+            bg.load_sum(cy, oy, tk.row, tk.j0, tk.n, out)
+    if prm.has_iface:
+        br = prm.brow
+        ik.staggered(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
+                     old.by[br], iface, out)
+
+
+@njit(cache=True, _nrt=False)
+def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
     """Record frame k at step n if due; False when the buffer is full (the caller must flush first)."""
     k = n - prm.n_drive_start
     fe = prm.frame_every
@@ -356,6 +447,7 @@ def _record(n, cur, prm, iface, drive, frames, tm):
     on = prm.drive != 0 and n > prm.n_drive_start
     for i in range(drive.force.shape[0]):
         frames.fdrive[slot, i] = drive.force[i] if on else 0.0
+    _energies(cur, old, sched, K, prm, iface, bud, frames.energy[slot])
     frames.step[slot] = n
     cursor[C_COUNT] = slot + 1
     cursor[C_LAST] = k
@@ -374,7 +466,7 @@ def _level(lv, n):
 
 
 @njit(cache=True, nogil=True)
-def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
+def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
     """Advance the state from step n0 towards n1; returns (n, why) with why DONE, FRAMES_FULL or STOPPED.
 
     ``diag.flags`` are this rank's problems (first one kept, with its step and place); ``diag.gflags``
@@ -390,7 +482,9 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
     tm = diag.timers
     while True:
         cur = _level(lv, n)
-        ok = _record(n, cur, prm, iface, drive, frames, tm)
+        if n == prm.n_drive_start:          # before its frame: the drive's start is the budget's zero
+            _budget_start(cur, _level(lv, n + 1), drive, bud)
+        ok = _record(n, cur, _level(lv, n + 1), sched, K, prm, iface, drive, bud, frames, tm)
         if not ok:
             beat[BEAT_IN_LOOP] = 0
             return n, FRAMES_FULL
@@ -398,7 +492,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag):
             beat[BEAT_IN_LOOP] = 0
             return n, DONE
         nxt = _level(lv, n + 1)
-        _step(n, n1, cur, nxt, Level(lv.zbx, lv.zby, lv.ztx, lv.zty), plan, sched, K, prm, iface, drive, diag)
+        _step(n, n1, cur, nxt, Level(lv.zbx, lv.zby, lv.ztx, lv.zty), plan, sched, K, prm, iface, drive, diag, bud)
         if (n + 1) % check == 0:
             t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
             _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)

@@ -10,6 +10,7 @@ Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
 """
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -23,6 +24,7 @@ from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
 from . import loop as L
+from .kernels import budget as bg
 from .kernels.scheme import ramp_share
 from ..scene.memory import CHECK_EVERY, event_room, frame_buffer
 from .state import State
@@ -69,8 +71,11 @@ class Simulation:
         self.frames = L.Frames(intact=np.zeros((cap, nsites), np.uint8), partner=np.zeros((cap, nsites), np.int32),
                                ux=np.zeros((cap, nsites)), uy=np.zeros((cap, nsites)), sxy=np.zeros((cap, nsites)),
                                syy=np.zeros((cap, nsites)), fx=np.zeros((cap, nsites)),
-                               fdrive=np.zeros((cap, ndrive)), step=np.zeros(cap, np.int64),
+                               fdrive=np.zeros((cap, ndrive)), energy=np.zeros((cap, 2, bg.N_TERMS)),
+                               step=np.zeros(cap, np.int64),
                                cursor=np.array([0, 0, -1], np.int64))
+        self.budget = self._budget(cf)
+        self.energy_base = None          # rank 0: the state's terms at the drive's start (``budget_frames``)
         # Steps per compiled call before any agreement: from the lattice and rank count, the same everywhere.
         self.chunk = int(np.clip(CHUNK_UPDATES * size / max(lat.n_nodes, 1), 64, 200_000))
         self.n = 0
@@ -92,9 +97,24 @@ class Simulation:
         """Run the compiled loop to step ``n_end`` or until it must stop; returns why it returned."""
         s = self.state
         n, why = L.advance(self.n, n_end, s.levels, self.plan, self.sched, s.K, self.params, s.iface, s.drive,
-                           self.frames, self.diag)
+                           self.frames, self.diag, self.budget)
         self.n = int(n)
         return why
+
+    def _budget(self, cf: float):
+        """The energy budget's running totals on this rank (``loop.Budget``), all zero."""
+        st, s = self.setup, self.state
+        bl, tl = self.layout.blocks
+        mat, dt, dmp = st.material, st.dt, st.damping
+        slots = len(s.drive.force)
+        sites = s.iface.bonds.shape[1]
+        gains = [dmp.rate_gain(k, dt) for k in (mat.kn_bottom, mat.kn_top)]
+        return L.Budget(damp_b=np.zeros((2, bl.shape[1])), damp_t=np.zeros((2, tl.shape[1])),
+                        work=np.zeros((2, slots)), broken=np.zeros((2, sites)), formed=np.zeros((2, sites)),
+                        base=np.zeros((2, bg.N_TERMS)), prev=np.zeros((2, slots)),
+                        sd=float(dmp.zeta / (4.0 * dt)) if dmp.damped else 0.0,
+                        inv_g=np.array([1.0 / g if g > 0 else 0.0 for g in gains]), inv_cf=float(1.0 / cf),
+                        inv_2dt2=float(0.5 / (dt * dt)))
 
     def step(self):
         """One step, n -> n + 1 (tests)."""
@@ -215,7 +235,7 @@ class Simulation:
             self.last_frame_step = int(fr.step[count - 1])
         if writer is not None and count:
             base = int(fr.cursor[L.C_BASE])
-            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]))
+            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]), self.budget_frames(count))
         fr.cursor[L.C_BASE] += count
         fr.cursor[L.C_COUNT] = 0
         ev = self.state.iface.events
@@ -286,6 +306,73 @@ class Simulation:
         self._snap = {k: snaps + m for m, k in enumerate(later)}
         self.snapshots_total = snaps + len(later)
         self.snapshots_written = snaps
+        self._energy_restore(attrs)
+
+    # ---------------------------------------------------------- energy budget --
+    def _pairs(self, parts) -> np.ndarray:
+        """Rank 0: [count, term] the correctly rounded sums (``math.fsum``) of every rank's pairs ``parts``
+        ([count, 2, term] each), so the same bits on any rank count (``kernels.budget``)."""
+        stack = np.stack(parts)                                   # [rank, count, 2, term]
+        count, terms = stack.shape[1], stack.shape[3]
+        return np.array([[math.fsum(stack[:, k, :, t].ravel()) for t in range(terms)] for k in range(count)])
+
+    def _to_root(self, x):
+        return [x] if self.comm is None else self.comm.gather(x, root=0)
+
+    def budget_frames(self, count: int) -> dict | None:
+        """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started:
+        work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual (contract
+        ``ENERGY_DATASETS``); collective.  The state's terms at the drive's start come from its frame
+        (or from the checkpoint a run continues); without them (a checkpoint that predates the budget)
+        they read NaN."""
+        fr = self.frames
+        parts = self._to_root(fr.energy[:count])
+        if self.rank != 0:
+            return None
+        tot = self._pairs(parts)
+        if self.energy_base is None and fr.cursor[L.C_BASE] == 0 and fr.step[0] == self.setup.n_drive_start:
+            self.energy_base = tot[0, [bg.KINETIC, bg.ELASTIC, bg.LOAD_Y]].copy()
+        base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+        e = 1.0 / self.setup.material.c_r ** 2
+        out = {"work_drive": tot[:, bg.W_DRIVE] * e, "damping": tot[:, bg.DAMPING] * e,
+               "broken": tot[:, bg.BROKEN] * e, "formed": tot[:, bg.FORMED] * e,
+               "kinetic": (tot[:, bg.KINETIC] - base[0]) * e, "elastic": (tot[:, bg.ELASTIC] - base[1]) * e,
+               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[2]) * e}
+        out["residual"] = (out["work_drive"] + out["work_normal"] + out["formed"]
+                           - (out["elastic"] + out["kinetic"] + out["damping"] + out["broken"]))
+        return out
+
+    def _energy_checkpoint(self) -> dict:
+        """The budget's part of a checkpoint (collective): the running totals over all ranks, each as a pair
+        (fsum and its exact remainder), and the state's terms at the drive's start."""
+        b = self.budget
+        mine = np.zeros((1, 2, bg.N_TERMS))
+        out = mine[0]
+        for acc, term in ((b.damp_b, bg.DAMPING), (b.damp_t, bg.DAMPING), (b.work, bg.W_DRIVE),
+                          (b.broken, bg.BROKEN), (b.formed, bg.FORMED)):
+            bg.total(acc, out, term)
+        out += b.base
+        parts = self._to_root(mine)
+        attrs = None
+        if self.rank == 0:
+            stack = np.stack(parts)[:, 0]                          # [rank, 2, term]
+            hi = np.array([math.fsum(stack[:, :, t].ravel()) for t in range(bg.N_TERMS)])
+            lo = np.array([math.fsum(list(stack[:, :, t].ravel()) + [-hi[t]]) for t in range(bg.N_TERMS)])
+            base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+            attrs = {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64)}
+        return attrs if self.comm is None else self.comm.bcast(attrs, root=0)
+
+    def _energy_restore(self, attrs: dict):
+        """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)."""
+        b, s = self.budget, self.state
+        tot = attrs.get("energy_totals")
+        b.base[:] = 0.0
+        if self.rank == 0:
+            b.base[:] = np.nan if tot is None else np.asarray(tot, np.float64)
+            base = attrs.get("energy_base")
+            self.energy_base = None if base is None or not np.all(np.isfinite(base)) else np.asarray(base)
+        u_prev = s.owned_u(self.n - 1)
+        b.prev[:] = u_prev[np.searchsorted(s.gid, s.driven_gid)].T
 
     def checkpoint_attrs(self) -> dict:
         """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""
@@ -293,7 +380,7 @@ class Simulation:
         counters = self.counters.copy()
         if self.comm is not None:
             counters = self.comm.allreduce(counters)
-        return {"step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
+        return {**self._energy_checkpoint(), "step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
                 "frames_written": self.frames_written, "last_frame_step": self.last_frame_step,
                 "events_written": self.events_written,
                 "snapshots_written": self.snapshots_written, "counters": counters,

@@ -100,6 +100,39 @@ EVENT_DATASETS = {
     "traction": (np.float64, "rho c_r^2: the bond's shear traction k_x (x_ij - x0)/a at that step, as sxy"),
 }
 
+# The energy budget: /energy/<name>, one value per interface frame (m c_r^2), in damped Verlet's discrete
+# energy (``engine.kernels.budget``): the state's terms as their change since the drive started, the works
+# and losses as their totals since then, so that
+#     work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual.
+ENERGY = "energy"
+ENERGY_DATASETS = {
+    "work_drive": "the drive's work on the driven nodes, sum over steps of f . (u(n+1) - u(n-1))/2",
+    "work_normal": "the normal load's work on the top face, the same sum",
+    "elastic": "change of the bonds' staggered energy 1/2 u(n-1)^T K u(n) (bulk and intact interface bonds)",
+    "kinetic": "change of the kinetic energy |u(n) - u(n-1)|^2 / (2 dt^2)",
+    "damping": "energy the damping took: zeta |u(n+1) - u(n-1)|^2/(4 dt) per node and step (\"absolute\"), "
+               "or the bonds' dashpots' work (\"bonds\")",
+    "broken": "the staggered energy of each bond at the step it broke, summed",
+    "formed": "the staggered energy of each bond at the step it re-formed, summed (with its new rest offset)",
+    "residual": "what the other terms leave: the scheme's round-off; NaN where a term is unknown",
+}
+
+
+def read_energy(path: str) -> dict | None:
+    """The energy budget of a run file (``ENERGY_DATASETS``, cut to the frames written, m c_r^2) with ``time``
+    (l/c_r); None for a file written before the budget existed."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        g = f.get(ENERGY)
+        if g is None:
+            return None
+        n = int(f[INTERFACE].attrs.get("frames_written", g["residual"].shape[0]))
+        out = {name: g[name][:n] for name in ENERGY_DATASETS}
+        out["time"] = f[INTERFACE]["time"][:n]
+        return out
+
+
 # The run's timings, root attributes named TIMING_PREFIX + name, in seconds unless said.
 TIMING_PREFIX = "timing_"
 TIMINGS = {

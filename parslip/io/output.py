@@ -24,7 +24,7 @@ from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from .contract import (EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, STATUS,
+from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, STATUS,
                        TIMING_PREFIX, put_status, status_value)
 from .scenefile import to_toml
 
@@ -321,6 +321,14 @@ class Output:
             values = st.law.site_values(ns)
             for name in SITE_DATASETS[1:]:          # after x: the bond table's rows written once per site
                 g[name][...] = values[name]
+        en = self._handles[ENERGY] = f.create_group(ENERGY)
+        en.attrs["units"] = "m c_r^2"
+        for name, meaning in ENERGY_DATASETS.items():
+            ds = en.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=np.float64, chunks=(max(rows, 64),),
+                                   dcpl=_early())
+            ds.attrs["units"] = "m c_r^2"
+            ds.attrs["meaning"] = meaning
+            self._handles[f"{ENERGY}/{name}"] = ds
         ev = self._handles[f"interface/{EVENTS}"] = g.create_group(EVENTS)
         ev.attrs["events_written"] = 0
         ev.attrs["site_column0"] = int(st.lattice.top.col0)
@@ -424,6 +432,9 @@ class Output:
                 if (per_frame and self.n_sites) or name in PER_FRAME_1D:
                     if name in g:
                         g[name].resize(nf, axis=0)
+            if ENERGY in f:
+                for name in ENERGY_DATASETS:
+                    f[ENERGY][name].resize(nf, axis=0)
             if EVENTS in g:                  # events past the checkpoint's are written again from there
                 for name, (dt_, unit) in EVENT_DATASETS.items():
                     if name not in g[EVENTS]:    # a file from before the field existed: NaN for its events
@@ -443,9 +454,10 @@ class Output:
             f.attrs["n_ranks"] = self.size
 
     # --------------------------------------------------------------- writes --
-    def interface_frames(self, k0, count, frames, times):
+    def interface_frames(self, k0, count, frames, times, energy=None):
         """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites,
-        recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``)."""
+        recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``) and, from rank 0,
+        their energy budget ``energy`` (``ENERGY_DATASETS``; None: not kept)."""
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
         self._test_hooks(k0 + count)
@@ -463,6 +475,9 @@ class Output:
                 self._ds("interface/loader")[k0:k0 + count] = loader
                 for name, values in sums.items():
                     self._ds(f"interface/{name}")[k0:k0 + count] = values
+                if energy is not None and ENERGY in self.f:
+                    for name, values in energy.items():
+                        self._ds(f"{ENERGY}/{name}")[k0:k0 + count] = values
             self._write("interface/time", put)
         # Rank 0's clock decides whether to flush, and every rank learns it from the agreement below, since
         # under mpio the flush is collective.

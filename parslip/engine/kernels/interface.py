@@ -44,6 +44,7 @@ from numba import njit
 from ...model.interface import (BREAK, CAND, CLOCK, DELTA_B, FORM, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER,
                                 REBOND_FACING, REFORM_ZERO, X0)
 from ...parallel.layout import SEARCH_MARGIN
+from . import budget as bg
 from .floats import like
 
 # Counters (owned events) and flags (a nonzero flag stops the run; see loop.FLAG_*).  The kinds of a bond
@@ -144,11 +145,13 @@ def _event(it, n, j, site, kind, q, dx, dy):
 
 
 @njit(cache=True, _nrt=False)
-def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
+def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, broken, formed):
     """Steps 1-3 above on every local top site at step ``n``, then the bond forces at u(t).
 
-    tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row; tx_prev, bx_prev: their x at
-    u(t - dt), for rules that read the slip velocity.  ``partner`` holds global
+    tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row; the *_prev: the same at
+    u(t - dt), for rules that read the slip velocity and for the budget: each break of an OWNED site adds
+    the bond's staggered energy (``kernels.budget.bond_energy``) to ``broken``, each re-formation to
+    ``formed`` (pairs by local top column).  ``partner`` holds global
     bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
     (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
     there is no bond.  ``claim`` is scratch: the free sites, then their claims.  Every break and
@@ -159,9 +162,9 @@ def update(n, tx, ty, bx, by, tx_prev, bx_prev, it):
     """
     zero = like(0, it.rules.delta0)
     _clear(it, zero)
-    nfree = _breaks(n, tx, ty, bx, by, it, zero)
+    nfree = _breaks(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, broken)
     _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero)
-    _grants(n, nfree, tx, ty, bx, by, it, zero)
+    _grants(n, nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, formed)
     if it.rules.contact > zero:
         _contacts(nfree, tx, ty, bx, by, it)
 
@@ -178,7 +181,7 @@ def _clear(it, zero):
 
 
 @njit(cache=True, _nrt=False)
-def _breaks(n, tx, ty, bx, by, it, zero):
+def _breaks(n, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, broken):
     """1. Breaks; the bonds that hold mark their substrate site taken and apply their force now (the
     positions do not change within the step).  The free sites are listed in ``claim``; returns how many."""
     g, p, bonds, reach = it.geom, it.rules, it.bonds, it.reach
@@ -203,10 +206,11 @@ def _breaks(n, tx, ty, bx, by, it, zero):
                 it.taken[i] = 1
                 _apply(j, i, dx, dy, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
                 continue
-            bonds[PARTNER, j] = -1
             if top_own:
                 it.counters[BREAKS] += 1
                 _event(it, n, j, j + site0, BREAK, q, dx, dy)
+                bg.add(broken, j, _staggered_bond(j + tbase, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds))
+            bonds[PARTNER, j] = -1
         it.claim[nfree] = j
         nfree += 1
     return nfree
@@ -285,7 +289,7 @@ def _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero):
 
 
 @njit(cache=True, _nrt=False)
-def _grants(n, nfree, tx, ty, bx, by, it, zero):
+def _grants(n, nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, formed):
     """3. Grants in increasing site order (the free list is in site order); a new bond's force applies at once."""
     g, p, bonds = it.geom, it.rules, it.bonds
     tbase, bbase, thi, d0 = g.tbase, g.bbase, g.thi, p.delta0
@@ -307,6 +311,8 @@ def _grants(n, nfree, tx, ty, bx, by, it, zero):
         if top_own:
             it.counters[FORMS] += 1
             _event(it, n, j, j + site0, FORM, i + bbase, dx, dy)
+            bg.add(formed, j, _staggered_bond(j + tbase, i + bbase, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0,
+                                              bonds))
 
 
 @njit(cache=True, _nrt=False)
@@ -408,6 +414,29 @@ def coverage(tx, bx, g):
     if bhi - 1 + bbase < g.bcols - 1 and bhi - 1 + bbase + float(bx[bhi - 1]) < hi + cb:
         return False
     return True
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _staggered_bond(g, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds):
+    """The staggered energy of top site j's bond to substrate site i (global g, q) between u(n-1) and u(n)."""
+    dx1, dy1 = _gap(g, q, tx, ty, bx, by, j, i, d0)
+    dx0, dy0 = _gap(g, q, txp, typ, bxp, byp, j, i, d0)
+    x0 = bonds[X0, j]
+    return bg.bond_energy(bonds[KX, j], bonds[KY, j], dx0 - x0, dy0 - d0, dx1 - x0, dy1 - d0)
+
+
+@njit(cache=True, _nrt=False)
+def staggered(tx, ty, bx, by, txp, typ, bxp, byp, it, out):
+    """out[ELASTIC] += the staggered energy of every intact bond of the OWNED top sites (``kernels.budget``),
+    with the bonds as they stand before this step's update."""
+    g, bonds = it.geom, it.bonds
+    d0 = it.rules.delta0
+    for j in range(g.town0, g.town1):
+        q = _partner(bonds, j)
+        i = q - g.bbase
+        if q >= 0 and g.blo <= i < g.bhi:
+            bg.add(out, bg.ELASTIC, _staggered_bond(j + g.tbase, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0,
+                                                    bonds))
 
 
 @njit(cache=True, _nrt=False)

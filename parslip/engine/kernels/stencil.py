@@ -60,10 +60,24 @@ def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt
             kt * hy + b * (qpx - qqx) + c * (qpy + qqy))
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def drag(acc, j, sd, dx, dy):
+    """Column j's running total of the body drag += sd |d|^2 (m c^2), d = u(t+dt) - u(t-dt), kept as two
+    floats by an error-free two-sum (``kernels.budget.add``; written out here so that no FMA enters it)."""
+    v = sd * (float(dx) * float(dx) + float(dy) * float(dy))
+    a = acc[0, j]
+    t = a + v
+    bp = t - a
+    acc[1, j] += (a - (t - bp)) + (v - bp)
+    acc[0, j] = t
+
+
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped):
+def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, acc, sd):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
-    forces are those of the field (zx, zy) (u(t) itself, or with the bonds' damping ``rate_field``)."""
+    forces are those of the field (zx, zy) (u(t) itself, or with the bonds' damping ``rate_field``).
+    With the body drag, each node's dissipation sd |u(t+dt) - u(t-dt)|^2 (sd = zeta/(4 dt)) is added to
+    its column's running total in ``acc`` (``kernels.budget``)."""
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
     ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
@@ -79,8 +93,12 @@ def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped):
             ux, uy = cx0[k], cy0[k]
             fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
                            ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
-            ox[k] = ux + (bb * (ux - ox[k]) + fx)
-            oy[k] = uy + (bb * (uy - oy[k]) + fy)
+            qx, qy = ox[k], oy[k]
+            nx = ux + (bb * (ux - qx) + fx)
+            ny = uy + (bb * (uy - qy) + fy)
+            ox[k] = nx
+            oy[k] = ny
+            drag(acc, j0 + k, sd, nx - qx, ny - qy)
     else:
         for k in range(n):
             ux, uy = cx0[k], cy0[k]
@@ -91,7 +109,7 @@ def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped):
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy):
+def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, acc, sd):
     """Row segment of a block's top row (``up`` False: no up bonds) or bottom row (``up`` True: no down bonds).
 
     Adds C (ex + gx, ey + gy): the per-column external force (ex, ey), e.g.
@@ -122,12 +140,17 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
         fx = kn * hx + a * (dpx + dqx) + b * (dpy - dqy) + cf * (exs[k] + gx)
         fy = kt * hy + b * (dpx - dqx) + c * (dpy + dqy) + cf * (eys[k] + gy)
         ux, uy = cx0[k], cy0[k]
-        ox[k] = ux + (damp * (ux - ox[k]) + fx)
-        oy[k] = uy + (damp * (uy - oy[k]) + fy)
+        qx, qy = ox[k], oy[k]
+        nx = ux + (damp * (ux - qx) + fx)
+        ny = uy + (damp * (uy - qy) + fy)
+        ox[k] = nx
+        oy[k] = ny
+        if damped:
+            drag(acc, j0 + k, sd, nx - qx, ny - qy)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy):
+def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy, acc, sd):
     """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
 
     Without branches: a missing neighbour is read from the zero ghost cells
@@ -148,8 +171,13 @@ def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, f
     gx = kn * hx + a * (dpx + dqx) + b * (dpy - dqy) + cf * fx
     gy = kt * hy + b * (dpx - dqx) + c * (dpy + dqy) + cf * fy
     damp = bb if damped else like(1, bb)
-    px[r, j] = ux + (damp * (ux - px[r, j]) + gx)
-    py[r, j] = uy + (damp * (uy - py[r, j]) + gy)
+    qx, qy = px[r, j], py[r, j]
+    nx = ux + (damp * (ux - qx) + gx)
+    ny = uy + (damp * (uy - qy) + gy)
+    px[r, j] = nx
+    py[r, j] = ny
+    if damped:
+        drag(acc, j, sd, nx - qx, ny - qy)
 
 
 @njit(cache=True, _nrt=False, fastmath={"contract"})

@@ -1,0 +1,130 @@
+"""The energy budget's arithmetic: running totals kept in two floats, and the state's energy at a frame.
+
+Damped Verlet conserves, without damping and external forces, the staggered energy of the half step
+n - 1/2 (m = 1, u in a, dt in a/c, energies in m c^2)
+
+    H(n - 1/2) = |u(n) - u(n-1)|^2 / (2 dt^2) + 1/2 u(n-1)^T K u(n)       (kinetic + elastic)
+
+with K the bulk and interface bonds as they stand between the steps n - 1 and n (for an interface
+bond, 1/2 [k_x (x_ij(n-1) - x0)(x_ij(n) - x0) + k_y (y_ij(n-1) - delta0)(y_ij(n) - delta0)]).  A step n
+changes it by exactly
+
+    f(n) . (u(n+1) - u(n-1)) / 2                   the work of an external force (drive, F_N)
+    - zeta |u(n+1) - u(n-1)|^2 / (4 dt)             the body drag ("absolute"), per node
+    + 1/2 [C F(z) - C F(u)] . (u(n+1) - u(n-1)) / C the bonds' dashpots ("bonds": z - u = g (u(n) - u(n-1)))
+    - the staggered energy of the bonds the step broke, + that of those it re-formed
+
+(``tests/test_energy_budget.py`` proves these forms from outside the engine).  The loop adds the
+per-step terms as they happen, each to a running total of its own unit (the damping to a column of
+its block, the drive's work to a driven node, breaks and re-formations to an interface site), and
+evaluates the state terms at every interface frame (``frame_energies``).
+
+Rank invariance.  A column's nodes are updated by tasks whose order depends on the rank count, so a
+plain running sum would round differently on 1 and 3 ranks.  Every total is therefore a pair of
+floats (hi, lo) grown by an error-free two-sum: hi + lo holds the exact sum to about 2^-106 of its
+size, whatever the order; rank 0 adds all pairs with ``math.fsum`` (correctly rounded), so the
+written value is the same bits on any rank count unless the exact sum lies within ~1e-30 of a
+rounding boundary.
+"""
+import numpy as np
+from numba import njit
+
+from .stencil import K_A, K_B, K_C, K_N, K_T, L_, DL_, DR_, R_, UL_, UR_
+
+# A running total's two floats: row HI and row LO of an accumulator array [2, units].
+HI, LO = 0, 1
+# The terms a frame records, each as (hi, lo) of this rank's share (``loop.Frames.energy``):
+#   W_DRIVE, DAMPING, BROKEN, FORMED   totals since the drive started (m c^2)
+#   KINETIC, ELASTIC                   H(n - 1/2)'s two parts at the frame's step n (m c^2)
+#   LOAD_Y                             sum over the loaded nodes of u_y(n) + u_y(n-1) (a): the load's work
+#                                      since the drive started is f_N/2 times its change (F_N is constant
+#                                      by then, so sum_m f (u(m+1) - u(m-1))/2 telescopes)
+W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y = range(7)
+N_TERMS = 7
+RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED)
+
+# Bond masks of the row kinds (``parallel.layout``): FULL, NO_UP (top row), NO_DOWN (bottom row).
+ALL = R_ | UR_ | UL_ | L_ | DL_ | DR_
+NO_UP_MASK = R_ | L_ | DL_ | DR_
+NO_DOWN_MASK = R_ | L_ | UR_ | UL_
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def add(acc, i, v):
+    """acc[HI, i] + acc[LO, i] += v without losing a bit (Knuth's two-sum; no FMA can enter it)."""
+    a = acc[HI, i]
+    s = a + v
+    bp = s - a
+    err = (a - (s - bp)) + (v - bp)
+    acc[HI, i] = s
+    acc[LO, i] += err
+
+
+@njit(cache=True, _nrt=False)
+def total(acc, out, k):
+    """out[k] (a pair) += the sum of every unit of ``acc``, kept as a pair."""
+    for i in range(acc.shape[1]):
+        add(out, k, acc[HI, i])
+        add(out, k, acc[LO, i])
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def masked_force(zx, zy, r, j, s, K, blk, mask):
+    """C F of node (r, j) from the field (zx, zy) with only the bonds in ``mask`` (``stencil.node_masked``'s
+    arithmetic, without the update)."""
+    kn, kt, a, b, c = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C]
+    vx, vy = zx[r, j], zy[r, j]
+    wr, wur, wul = float(mask & R_), float((mask & UR_) >> 1), float((mask & UL_) >> 2)
+    wl, wdl, wdr = float((mask & L_) >> 3), float((mask & DL_) >> 4), float((mask & DR_) >> 5)
+    hx = wl * (zx[r, j - 1] - vx) + wr * (zx[r, j + 1] - vx)
+    hy = wl * (zy[r, j - 1] - vy) + wr * (zy[r, j + 1] - vy)
+    dpx = wur * (zx[r + 1, j + s] - vx) + wdl * (zx[r - 1, j - 1 + s] - vx)
+    dpy = wur * (zy[r + 1, j + s] - vy) + wdl * (zy[r - 1, j - 1 + s] - vy)
+    dqx = wul * (zx[r + 1, j - 1 + s] - vx) + wdr * (zx[r - 1, j + s] - vx)
+    dqy = wul * (zy[r + 1, j - 1 + s] - vy) + wdr * (zy[r - 1, j + s] - vy)
+    return (kn * hx + a * (dpx + dqx) + b * (dpy - dqy),
+            kt * hy + b * (dpx - dqx) + c * (dpy + dqy))
+
+
+@njit(cache=True, _nrt=False)
+def bonds_damping(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, mask, inv_g, inv_cf, acc):
+    """The bonds' dashpots' share of a row segment just updated (px = u(n+1)), added to its columns:
+    -1/2 [C F(z) - C F(u)] . (u(n+1) - u(n-1)) / C, with F(z) - F(u) = F(z - u) (the bonds are linear)
+    and u(n-1) = u(n) - (z - u(n)) / g, both from fields the update leaves intact."""
+    for k in range(n):
+        j = j0 + k
+        fx, fy = masked_force(zx, zy, r, j, s, K, blk, mask)
+        ux, uy = masked_force(cx, cy, r, j, s, K, blk, mask)
+        wx = (float(zx[r, j]) - float(cx[r, j])) * inv_g
+        wy = (float(zy[r, j]) - float(cy[r, j])) * inv_g
+        spx = (float(px[r, j]) - float(cx[r, j])) + wx
+        spy = (float(py[r, j]) - float(cy[r, j])) + wy
+        add(acc, j, -0.5 * ((float(fx) - float(ux)) * spx + (float(fy) - float(uy)) * spy) * inv_cf)
+
+
+@njit(cache=True, _nrt=False)
+def row_energies(cx, cy, ox, oy, r, j0, n, s, K, blk, mask, inv_cf, inv_2dt2, out):
+    """A row segment's kinetic |u(n) - u(n-1)|^2 / (2 dt^2) and bulk elastic 1/2 u(n-1)^T K u(n) =
+    -1/2 u(n-1) . F(u(n)) (fixed rows hold u = 0, so their bonds count whole), into out[KINETIC] and
+    out[ELASTIC]."""
+    for k in range(n):
+        j = j0 + k
+        fx, fy = masked_force(cx, cy, r, j, s, K, blk, mask)
+        vx = float(cx[r, j]) - float(ox[r, j])
+        vy = float(cy[r, j]) - float(oy[r, j])
+        add(out, KINETIC, (vx * vx + vy * vy) * inv_2dt2)
+        add(out, ELASTIC, -0.5 * (float(ox[r, j]) * float(fx) + float(oy[r, j]) * float(fy)) * inv_cf)
+
+
+@njit(cache=True, _nrt=False)
+def load_sum(cy, oy, r, j0, n, out):
+    """out[LOAD_Y] += sum over the segment of u_y(n) + u_y(n-1)."""
+    for k in range(n):
+        add(out, LOAD_Y, float(cy[r, j0 + k]) + float(oy[r, j0 + k]))
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def bond_energy(kx, ky, sx0, sy0, sx1, sy1):
+    """An interface bond's staggered energy 1/2 [k_x s_x(n-1) s_x(n) + k_y s_y(n-1) s_y(n)], s its stretch
+    (x_ij - x0, y_ij - delta0) at the two levels."""
+    return 0.5 * (float(kx) * float(sx0) * float(sx1) + float(ky) * float(sy0) * float(sy1))
