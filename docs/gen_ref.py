@@ -262,6 +262,12 @@ def output_format_page() -> str:
         out.append(f"| `/{g}/{name}` | {np.dtype(dtype).name} | {pf} | {_cell(units)} |")
     out += ["", f"Per-frame datasets hold `frames_written` valid frames (an attribute of `/{g}`); "
             "the readers below cut them to it.", "",
+            f"## The `/{contract.ENERGY}` group", "",
+            "One float64 value per interface frame, in m c_r^2: "
+            "`work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual`.", "",
+            "| dataset | meaning |", "| --- | --- |"]
+    out += [f"| `/{contract.ENERGY}/{name}` | {_cell(meaning)} |" for name, meaning in contract.ENERGY_DATASETS.items()]
+    out += ["",
             "## The contract", "", "From the module's docstring:", "",
             "```text", inspect.cleandoc(contract.__doc__ or ""), "```", "",
             "## Readers", "",

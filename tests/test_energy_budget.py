@@ -127,3 +127,43 @@ def test_budget_closes_at_half_step():
     t = _budget(sim, 2400)
     assert sim.counters[0] > 0 and t["damping"] > 0
     assert abs(t["residual"]) < 1e-9 * t["work_drive"], t
+
+
+# --- the budget the engine keeps ----------------------------------------------------------------------
+
+def _engine_budget(tmp_path, over: dict) -> dict:
+    """The run's /energy (m c_r^2), by ``parslip.run`` on this process."""
+    import parslip
+    from helpers import small_toml
+    sc = tmp_path / "s.toml"
+    sc.write_text(small_toml(**over))
+    run = parslip.run(str(sc), out=str(tmp_path / "e.vtkhdf"), progress=False)
+    return run.energy
+
+
+@pytest.mark.parametrize("form", ["absolute", "bonds"])
+def test_the_engine_keeps_the_budget_computed_from_outside(tmp_path, form):
+    """/energy at a frame equals the budget summed step by step from outside the engine over the same
+    steps (each term, to 1e-9 of the drive's work), and with the body drag it closes: the residual stays
+    below 1e-9 of the drive work at every frame (the kernels round each node's energy to 3.6e-12 m c^2,
+    ``kernels.exact``).  With the bonds' dashpots the damping is the balance, checked against their work
+    summed from outside."""
+    over = {**SMALL, "drive.mode": "shear", "time.damping": form, "drive.v0": 0.05, "drive.duration": 2.0,
+            "output.snapshots": 0}
+    e = _engine_budget(tmp_path, over)
+    st = derive(scene(**over))
+    k = 20                                       # a frame well into the drive, after bonds broke
+    t = _budget(Simulation(st), k * st.frame_every)
+    cr2 = st.material.c_r ** 2
+    work = t["work_drive"]
+    assert work > 0 and t["bonds"] != 0.0
+    assert e["work_drive"][k] * cr2 == pytest.approx(work, rel=1e-9)
+    assert e["work_normal"][k] * cr2 == pytest.approx(t["work_normal"], abs=1e-9 * work)
+    assert e["damping"][k] * cr2 == pytest.approx(t["damping"], abs=1e-9 * work)
+    assert (e["elastic"][k] + e["kinetic"][k]) * cr2 == pytest.approx(t["state"], abs=1e-9 * work)
+    assert (e["broken"][k] - e["formed"][k]) * cr2 == pytest.approx(t["bonds"], abs=1e-9 * work)
+    assert e["broken"][-1] > 0 and e["formed"][-1] > 0
+    if form == "absolute":
+        assert np.all(np.abs(e["residual"]) <= 1e-9 * np.max(e["work_drive"]))
+    else:           # the dashpots' work is the balance of the others (``Simulation.budget_frames``)
+        assert np.isnan(e["residual"]).all()

@@ -12,6 +12,7 @@ asked for.
     run.interface["ux"]          # [frames, sites], in l
     run.times                    # interface frame times, l/c_r
     run.events                   # every bond break and re-formation, exact to the time step
+    run.energy                   # the energy budget per frame: works, elastic, kinetic, damping, breaks
     mesh = run.snapshot_at(30.0) # pyvista UnstructuredGrid nearest t = 30 l/c_r
     [f.nucleation_time for f in run.fronts()]
     run.mu, run.mu_s, run.static_peak, run.precursors()   # friction (analysis.friction)
@@ -182,6 +183,14 @@ class Run:
             cache[key] = fronts(self, **kw)
         return cache[key]
 
+
+    @cached_property
+    def energy(self) -> dict | None:
+        """The energy budget per interface frame (``/energy``, m c_r^2; ``contract.ENERGY_DATASETS``):
+        work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual, the state's
+        terms as their change since the drive started, the others as totals since then; with ``time``
+        (l/c_r).  None for a file written before the budget existed."""
+        return None if self.path == "<memory>" else contract.read_energy(self.path)
 
     # --- friction (``analysis.friction``: the definitions) -----------------------
     @property

@@ -56,7 +56,7 @@ from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
 from .kernels.scheme import ramp_share
-from .kernels.stencil import K_RATE, node_masked, rate_field, row_edge, row_full
+from .kernels.stencil import K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge, row_full
 
 # State: each block as [row, column] arrays, x and y apart, at two Verlet levels; and the field z whose bond
 # forces the update takes with the bonds' damping (``kernels.stencil.rate_field``; 1 x 1 arrays without it).
@@ -71,13 +71,14 @@ Drive = namedtuple("Drive", "drive0 index force")
 # Interface frame buffer: ``cap`` frames of the OWNED top sites (``kernels.interface.record``), the drive
 # force of each OWNED driven node, the step of each frame, and the cursor [C_BASE, C_COUNT, C_LAST].
 Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy step cursor")
-# The energy budget's running totals on one rank (``kernels.budget``), each an array [2, units] of pairs
-# (hi, lo): damp_b, damp_t per column of each block; work per driven slot; broken, formed per interface
-# site (local column of the block's interface row).  base [2, N_TERMS]: what a restart carried over (rank 0);
-# prev [2, slots]: each driven slot's u(n-1) (x, y).  Scalars: sd = zeta/(4 dt) with the body drag (else 0;
-# c^2/a^2), inv_g[block] = 1/g of the bonds' dashpots (``model.damping.rate_gain``; 0 without),
-# inv_cf = 1/C (c^2/a^2), inv_2dt2 = 1/(2 dt^2) (c^2/a^2).
-Budget = namedtuple("Budget", "damp_b damp_t work broken formed base prev sd inv_g inv_cf inv_2dt2")
+# The energy budget on one rank (``kernels.budget``): acc [N_Q, 2] int64, the exact sums the row kernels
+# make (``kernels.exact``: the damping since the drive started; the kinetic and bulk elastic energy of the
+# last step that ended on a frame); work per driven slot, broken and formed per interface site (local
+# column of the block's interface row), each an array [2, units] of float pairs (hi, lo); base [2, N_TERMS]:
+# what a restart carried over (rank 0); prev [2, slots]: each driven slot's u(n-1) (x, y); scale [N_Q]: each
+# exact sum's quanta per m c^2 (``kernels.exact.scales``); cs: the kernels' factors with them,
+# [zeta/(4 dt) S_damp, -S_damp/(2 C), S_kin/(2 dt^2), -S_el/(2 C)] (``stencil.budget_shares``).
+Budget = namedtuple("Budget", "acc work broken formed base prev cs scale")
 # What the loop reports: flags (this rank's first problem), gflags (their MAX over the ranks), timers
 # (ns per phase), beat (BEAT_STEP: the step the loop last passed, read by the monitor thread).
 Diag = namedtuple("Diag", "flags gflags timers beat")
@@ -143,7 +144,7 @@ def _flag(flags, bit, step, block, row, col, value):
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm, acc, bud):
+def _drive(cx, cy, zx, zy, px, py, r, j, s, mask, K, blk, drive, drive_on, shift, prm, bud, energy):
     """Drive node (r, j) of the driven face, once it has had its free update u(n+1) in ``px``.
 
     Prescribed (DRIVE_SPRING unset): its x becomes drive0 + v0 (t(n+1) - t_drive); with KEEP_FORCE keep the
@@ -153,12 +154,13 @@ def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm, acc, bud):
     (u_y(n+1) = u_y(n): held since the drive started).  A node of the face outside ``drive.rows`` has no
     slot (index -1) and is left free.
 
-    The budget: the drive's work f . (u(n+1) - u(n-1))/2 (with the force that holds y, if held) goes to
-    the slot's total, and the body drag the kernel counted on the free update is corrected to the
-    node's final u(n+1) (``kernels.budget``); ``bud.prev`` holds the slot's u(n-1)."""
+    Returns the node's exact shares of the budget on its final u(n+1) (``stencil._budget``; the caller
+    drops what the row kernel counted on the free update) and adds the drive's work
+    f . (u(n+1) - u(n-1))/2, with the force that holds y if held, to the slot's total; ``bud.prev`` holds the
+    slot's u(n-1)."""
     slot = drive.index[r, j]
     if slot < 0:
-        return
+        return 0, 0, 0
     xf, yf = px[r, j], py[r, j]
     if drive_on & DRIVE_SPRING:
         f = prm.spring * (drive.drive0[r, j] + (shift - prm.v0dt) - cx[r, j])
@@ -173,79 +175,97 @@ def _drive(cx, cy, px, py, r, j, drive, drive_on, shift, prm, acc, bud):
     if drive_on & DRIVE_XY:
         py[r, j] = cy[r, j]
         fy = (float(cy[r, j]) - float(yf)) * float(prm.inv_cf)
-    _drive_budget(slot, j, float(f), fy, float(xf), float(yf), float(px[r, j]), float(py[r, j]), float(cx[r, j]),
-                  float(cy[r, j]), prm.damped, acc, bud)
-
-
-@njit(cache=True, _nrt=False, inline="always")
-def _drive_budget(slot, j, fx, fy, xf, yf, x1, y1, x, y, damped, acc, bud):
-    """A driven node's share of the budget (``_drive``): free update (xf, yf), final (x1, y1), u(n) = (x, y)."""
     x0, y0 = bud.prev[0, slot], bud.prev[1, slot]
-    bg.add(bud.work, slot, 0.5 * (fx * (x1 - x0) + fy * (y1 - y0)))
-    if damped:
-        free = (xf - x0) * (xf - x0) + (yf - y0) * (yf - y0)
-        bg.add(acc, j, bud.sd * (((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0)) - free))
-    bud.prev[0, slot] = x
-    bud.prev[1, slot] = y
+    bg.add(bud.work, slot, 0.5 * (float(f) * (float(px[r, j]) - x0) + fy * (float(py[r, j]) - y0)))
+    bud.prev[0, slot] = cx[r, j]
+    bud.prev[1, slot] = cy[r, j]
+    fux, fuy = px[r, j], py[r, j]            # unused unless on a frame's step: the body drag needs no force
+    if energy:
+        fux, fuy = masked_force(cx, cy, r, j, s, K, blk, mask)
+    return budget_shares(cx[r, j], cy[r, j], x0, y0, px[r, j], py[r, j], fux, fuy, bud.cs, prm.damped, energy)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
 def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy,
-          acc, bud):
-    """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y).  The
-    damping's dissipation goes to the block's column totals ``acc`` (``kernels.budget``)."""
+          bud, energy):
+    """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y).  Their
+    exact shares of the budget go to ``bud.acc`` (``kernels.budget``)."""
     cf = prm.cf
-    damped = prm.damped
+    damped, rated = prm.damped, prm.rated
+    cs = bud.cs
     zero = like(0, cf)
-    sd = bud.sd
+    ds = 0
+    ks = 0
+    es = 0
     for t in range(t0, t1):
         tk = tasks[t]
         r, j0, n, s = tk.row, tk.j0, tk.n, tk.s
         g = gy if tk.load else zero
         if tk.kind == FULL:
-            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, acc, sd)
+            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, rated, energy,
+                               cs)
         elif tk.extra:
-            row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf,
-                     ex, ey, zero, g, acc, sd)
+            d, k, e = row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped,
+                               tk.kind == NO_DOWN, cf, ex, ey, zero, g, rated, energy, cs)
         else:
-            row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, tk.kind == NO_DOWN, cf,
-                     zeros, zeros, zero, g, acc, sd)
-        if tk.drive and drive_on:
-            for j in range(j0, j0 + n):
-                _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm, acc, bud)
-        if prm.rated:          # after the drive: the dashpots' work is taken on the node's final u(n+1)
+            d, k, e = row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped,
+                               tk.kind == NO_DOWN, cf, zeros, zeros, zero, g, rated, energy, cs)
+        if tk.drive and drive_on:        # a driven row (T0): every node's share taken on its final u(n+1)
             mask = bg.ALL if tk.kind == FULL else (bg.NO_UP_MASK if tk.kind == NO_UP else bg.NO_DOWN_MASK)
-            bg.bonds_damping(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, mask,
-                             bud.inv_g[tk.block], bud.inv_cf, acc)
+            d = k = e = 0
+            for j in range(j0, j0 + n):
+                d2, k2, e2 = _drive(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, mask, K, tk.block, drive, drive_on,
+                                    shift, prm, bud, energy)
+                d += d2
+                k += k2
+                e += e2
+        ds += d
+        ks += k
+        es += e
+    _deposit_shares(bud, ds, ks, es, energy)
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _deposit_shares(bud, ds, ks, es, energy):
+    bg.deposit(bud.acc, bg.Q_DAMP, ds)
+    if energy:
+        bg.deposit(bud.acc, bg.Q_KIN, ks)
+        bg.deposit(bud.acc, bg.Q_EL, es)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
-def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy, acc,
-           bud):
+def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy, bud,
+           energy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
     cf = prm.cf
-    damped = prm.damped
+    damped, rated = prm.damped, prm.rated
+    cs = bud.cs
     zero = like(0, cf)
-    sd = bud.sd
+    ds = 0
+    ks = 0
+    es = 0
     for t in range(t0, t1):
         tk = tasks[t]
         r, j, s = tk.row, tk.j0, tk.s
         if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, acc, sd)  # slab edge
+            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, rated, energy,
+                               cs)   # interior node, slab edge
         else:
             fx = ex[j] if tk.extra else zero
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
-            node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx, fy,
-                        acc, sd)
-        if tk.drive and drive_on:
-            _drive(cur_x, cur_y, nxt_x, nxt_y, r, j, drive, drive_on, shift, prm, acc, bud)
-        if prm.rated:
-            bg.bonds_damping(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, tk.mask,
-                             bud.inv_g[tk.block], bud.inv_cf, acc)
+            d, k, e = node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx,
+                                  fy, rated, energy, cs)
+        if tk.drive and drive_on and drive.index[r, j] >= 0:
+            d, k, e = _drive(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, tk.mask, K, tk.block, drive, drive_on,
+                             shift, prm, bud, energy)
+        ds += d
+        ks += k
+        es += e
+    _deposit_shares(bud, ds, ks, es, energy)
 
 
 @njit(cache=True, _nrt=False)
-def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud):
+def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
     move the halo messages halfway through (``progress``, a no-op on one rank)."""
     tasks = sched.tasks
@@ -255,18 +275,18 @@ def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, sh
     # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
     if pb[NODES] > pb[ROWS]:
         _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-              iface.exb_y, iface.zeros, drive, 0, shift, gy, bud.damp_b, bud)
+              iface.exb_y, iface.zeros, drive, 0, shift, gy, bud, energy)
     if phase == LATE:
         progress(plan)
     if pb[END] > pb[NODES]:
         _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-               iface.exb_y, drive, 0, shift, gy, bud.damp_b, bud)
+               iface.exb_y, drive, 0, shift, gy, bud, energy)
     if pt[NODES] > pt[ROWS]:
         _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
-              iface.ext_y, iface.zeros, drive, drive_on, shift, gy, bud.damp_t, bud)
+              iface.ext_y, iface.zeros, drive, drive_on, shift, gy, bud, energy)
     if pt[END] > pt[NODES]:
         _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
-               iface.ext_y, drive, drive_on, shift, gy, bud.damp_t, bud)
+               iface.ext_y, drive, drive_on, shift, gy, bud, energy)
 
 
 @njit(cache=True, _nrt=False)
@@ -330,6 +350,11 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
     drive_on = prm.drive if n >= n_ds else 0         # DRIVE_X or DRIVE_XY once the drive runs
     if drive_on and (n + 1 >= n1 or (n + 1 - n_ds) % prm.frame_every == 0):
         drive_on |= KEEP_FORCE
+    # A step that ends on a frame: the kernels also sum the state's energy H(n + 1/2) that frame records.
+    energy = n + 1 >= n_ds and (n + 1 - n_ds) % prm.frame_every == 0
+    if energy:
+        bud.acc[bg.Q_KIN, :] = 0
+        bud.acc[bg.Q_EL, :] = 0
     if prm.drive and n == n_ds:
         d0 = drive.drive0
         for r in range(d0.shape[0]):
@@ -357,11 +382,11 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
         rate_field(cur.tx, cur.ty, nxt.tx, nxt.ty, z.tx, z.ty, K[1, K_RATE])
         src = z
     t1 = now_ns(clk) if timed else 0
-    _tasks(EARLY, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud)
+    _tasks(EARLY, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
     t2 = now_ns(clk) if timed else 0
     err = post(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     t3 = now_ns(clk) if timed else 0
-    _tasks(LATE, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud)
+    _tasks(LATE, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
     t4 = now_ns(clk) if timed else 0
     err |= complete(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     if timed:
@@ -380,8 +405,9 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
 def _budget_start(cur, old, drive, bud):
     """The budget's totals start with the drive (step n_drive_start): zero (with what a restart before it
     carried over), and each driven slot's u(n-1)."""
-    for acc in (bud.damp_b, bud.damp_t, bud.work, bud.broken, bud.formed, bud.base):
+    for acc in (bud.work, bud.broken, bud.formed, bud.base):
         acc[:, :] = 0.0
+    bud.acc[bg.Q_DAMP, :] = 0
     idx = drive.index
     for r in range(idx.shape[0]):
         for j in range(idx.shape[1]):
@@ -392,33 +418,26 @@ def _budget_start(cur, old, drive, bud):
 
 
 @njit(cache=True, _nrt=False)
-def _energies(cur, old, sched, K, prm, iface, bud, out):
-    """This rank's share of the budget at a frame (``kernels.budget``), each term a pair in out[term]:
-    the running totals (with the base a restart carried over), then H(n - 1/2) and the load's sum."""
+def _energies(cur, old, sched, prm, iface, bud, out):
+    """This rank's share of the budget at a frame (``kernels.budget``), out[:, term]: the float pairs in rows
+    0-1 (the running totals with what a restart carried over, the interface bonds' staggered energy, the
+    load's sum), the kernels' exact sums in rows 2-4 (the damping; the kinetic and bulk elastic energy the
+    step that ended here left)."""
     out[:, :] = 0.0
-    bg.total(bud.damp_b, out, bg.DAMPING)
-    bg.total(bud.damp_t, out, bg.DAMPING)
     bg.total(bud.work, out, bg.W_DRIVE)
     bg.total(bud.broken, out, bg.BROKEN)
     bg.total(bud.formed, out, bg.FORMED)
     for k in range(bg.N_TERMS):
         bg.add(out, k, bud.base[0, k])
         bg.add(out, k, bud.base[1, k])
+    bg.exact_parts(bud.acc, bg.Q_DAMP, bud.scale, out, bg.DAMPING)
+    bg.exact_parts(bud.acc, bg.Q_KIN, bud.scale, out, bg.KINETIC)
+    bg.exact_parts(bud.acc, bg.Q_EL, bud.scale, out, bg.ELASTIC)
     tasks = sched.tasks
     for t in range(tasks.shape[0]):
         tk = tasks[t]
-        if tk.kind == MASKED:
-            mask = tk.mask
-        else:
-            mask = bg.ALL if tk.kind == FULL else (bg.NO_UP_MASK if tk.kind == NO_UP else bg.NO_DOWN_MASK)
-        if tk.block == 0:
-            cx, cy, ox, oy = cur.bx, cur.by, old.bx, old.by
-        else:
-            cx, cy, ox, oy = cur.tx, cur.ty, old.tx, old.ty
-        bg.row_energies(cx, cy, ox, oy, tk.row, tk.j0, tk.n, tk.s, K, tk.block, mask, bud.inv_cf, bud.inv_2dt2,
-                        out)
         if tk.load:
-            bg.load_sum(cy, oy, tk.row, tk.j0, tk.n, out)
+            bg.load_sum(cur.ty, old.ty, tk.row, tk.j0, tk.n, out)
     if prm.has_iface:
         br = prm.brow
         ik.staggered(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
@@ -447,7 +466,7 @@ def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
     on = prm.drive != 0 and n > prm.n_drive_start
     for i in range(drive.force.shape[0]):
         frames.fdrive[slot, i] = drive.force[i] if on else 0.0
-    _energies(cur, old, sched, K, prm, iface, bud, frames.energy[slot])
+    _energies(cur, old, sched, prm, iface, bud, frames.energy[slot])
     frames.step[slot] = n
     cursor[C_COUNT] = slot + 1
     cursor[C_LAST] = k

@@ -26,10 +26,11 @@ size, whatever the order; rank 0 adds all pairs with ``math.fsum`` (correctly ro
 written value is the same bits on any rank count unless the exact sum lies within ~1e-30 of a
 rounding boundary.
 """
-import numpy as np
 from numba import njit
 
-from .stencil import K_A, K_B, K_C, K_N, K_T, L_, DL_, DR_, R_, UL_, UR_
+from .exact import N_Q, Q_DAMP, Q_EL, Q_KIN, WORD  # noqa: F401  (the kernels' exact sums)
+
+from .stencil import DL_, DR_, L_, R_, UL_, UR_
 
 # A running total's two floats: row HI and row LO of an accumulator array [2, units].
 HI, LO = 0, 1
@@ -50,6 +51,26 @@ NO_DOWN_MASK = R_ | L_ | UR_ | UL_
 
 
 @njit(cache=True, inline="always", _nrt=False)
+def deposit(acc, q, x):
+    """acc[q] (hi, lo: the integer hi * 2^62 + lo, lo in [0, 2^62)) += x, exactly."""
+    lo = acc[q, 1] + x
+    carry = lo >> WORD
+    acc[q, 0] += carry
+    acc[q, 1] = lo - (carry << WORD)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def exact_parts(acc, q, scale, out, k):
+    """out[2:5, k] = three floats whose exact sum is acc[q] / scale[q] (each part exact: the quanta's two
+    words cut into pieces of at most 31 bits, times a power of two)."""
+    inv = 1.0 / scale[q]
+    lo = acc[q, 1]
+    out[2, k] = float(acc[q, 0]) * (2.0 ** WORD) * inv
+    out[3, k] = float(lo >> 31) * (2.0 ** 31) * inv
+    out[4, k] = float(lo & ((1 << 31) - 1)) * inv
+
+
+@njit(cache=True, inline="always", _nrt=False)
 def add(acc, i, v):
     """acc[HI, i] + acc[LO, i] += v without losing a bit (Knuth's two-sum; no FMA can enter it)."""
     a = acc[HI, i]
@@ -66,54 +87,6 @@ def total(acc, out, k):
     for i in range(acc.shape[1]):
         add(out, k, acc[HI, i])
         add(out, k, acc[LO, i])
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def masked_force(zx, zy, r, j, s, K, blk, mask):
-    """C F of node (r, j) from the field (zx, zy) with only the bonds in ``mask`` (``stencil.node_masked``'s
-    arithmetic, without the update)."""
-    kn, kt, a, b, c = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C]
-    vx, vy = zx[r, j], zy[r, j]
-    wr, wur, wul = float(mask & R_), float((mask & UR_) >> 1), float((mask & UL_) >> 2)
-    wl, wdl, wdr = float((mask & L_) >> 3), float((mask & DL_) >> 4), float((mask & DR_) >> 5)
-    hx = wl * (zx[r, j - 1] - vx) + wr * (zx[r, j + 1] - vx)
-    hy = wl * (zy[r, j - 1] - vy) + wr * (zy[r, j + 1] - vy)
-    dpx = wur * (zx[r + 1, j + s] - vx) + wdl * (zx[r - 1, j - 1 + s] - vx)
-    dpy = wur * (zy[r + 1, j + s] - vy) + wdl * (zy[r - 1, j - 1 + s] - vy)
-    dqx = wul * (zx[r + 1, j - 1 + s] - vx) + wdr * (zx[r - 1, j + s] - vx)
-    dqy = wul * (zy[r + 1, j - 1 + s] - vy) + wdr * (zy[r - 1, j + s] - vy)
-    return (kn * hx + a * (dpx + dqx) + b * (dpy - dqy),
-            kt * hy + b * (dpx - dqx) + c * (dpy + dqy))
-
-
-@njit(cache=True, _nrt=False)
-def bonds_damping(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, mask, inv_g, inv_cf, acc):
-    """The bonds' dashpots' share of a row segment just updated (px = u(n+1)), added to its columns:
-    -1/2 [C F(z) - C F(u)] . (u(n+1) - u(n-1)) / C, with F(z) - F(u) = F(z - u) (the bonds are linear)
-    and u(n-1) = u(n) - (z - u(n)) / g, both from fields the update leaves intact."""
-    for k in range(n):
-        j = j0 + k
-        fx, fy = masked_force(zx, zy, r, j, s, K, blk, mask)
-        ux, uy = masked_force(cx, cy, r, j, s, K, blk, mask)
-        wx = (float(zx[r, j]) - float(cx[r, j])) * inv_g
-        wy = (float(zy[r, j]) - float(cy[r, j])) * inv_g
-        spx = (float(px[r, j]) - float(cx[r, j])) + wx
-        spy = (float(py[r, j]) - float(cy[r, j])) + wy
-        add(acc, j, -0.5 * ((float(fx) - float(ux)) * spx + (float(fy) - float(uy)) * spy) * inv_cf)
-
-
-@njit(cache=True, _nrt=False)
-def row_energies(cx, cy, ox, oy, r, j0, n, s, K, blk, mask, inv_cf, inv_2dt2, out):
-    """A row segment's kinetic |u(n) - u(n-1)|^2 / (2 dt^2) and bulk elastic 1/2 u(n-1)^T K u(n) =
-    -1/2 u(n-1) . F(u(n)) (fixed rows hold u = 0, so their bonds count whole), into out[KINETIC] and
-    out[ELASTIC]."""
-    for k in range(n):
-        j = j0 + k
-        fx, fy = masked_force(cx, cy, r, j, s, K, blk, mask)
-        vx = float(cx[r, j]) - float(ox[r, j])
-        vy = float(cy[r, j]) - float(oy[r, j])
-        add(out, KINETIC, (vx * vx + vy * vy) * inv_2dt2)
-        add(out, ELASTIC, -0.5 * (float(ox[r, j]) * float(fx) + float(oy[r, j]) * float(fy)) * inv_cf)
 
 
 @njit(cache=True, _nrt=False)

@@ -40,6 +40,7 @@ decomposition.
 """
 from numba import njit
 
+from .exact import MAGIC_BITS, quant, raw
 from .floats import like
 
 # Bits of the neighbour mask: right, up-right, up-left, left, down-left, down-right.
@@ -60,107 +61,175 @@ def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt
             kt * hy + b * (qpx - qqx) + c * (qpy + qqy))
 
 
-@njit(cache=True, inline="always", _nrt=False)
-def drag(acc, j, sd, dx, dy):
-    """Column j's running total of the body drag += sd |d|^2 (m c^2), d = u(t+dt) - u(t-dt), kept as two
-    floats by an error-free two-sum (``kernels.budget.add``; written out here so that no FMA enters it)."""
-    v = sd * (float(dx) * float(dx) + float(dy) * float(dy))
-    a = acc[0, j]
-    t = a + v
-    bp = t - a
-    acc[1, j] += (a - (t - bp)) + (v - bp)
-    acc[0, j] = t
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, damped, energy):
+    """A node's exact shares of the budget (``kernels.exact``, in quanta) after its update u(t-dt) = q ->
+    u(t+dt) = n from u(t): the body drag of the step, sd |n - q|^2 (the bonds' dashpots are not summed
+    here: ``kernels.budget``); in a step that ends on a frame, |n - u|^2 / (2 dt^2) and the bulk elastic
+    -1/2 n . C F(u) / C with C F(u) = (gx, gy), which sum to H(t + dt/2).  ``cs`` holds the factors with
+    each term's scale in them (``Budget.cs``)."""
+    d = 0
+    k = 0
+    e = 0
+    if damped:
+        dx, dy = float(nx) - float(qx), float(ny) - float(qy)
+        d = quant((dx * dx + dy * dy) * cs[0])
+    if energy:
+        vx, vy = float(nx) - float(ux), float(ny) - float(uy)
+        k = quant((vx * vx + vy * vy) * cs[2])
+        e = quant((float(nx) * float(gx) + float(ny) * float(gy)) * cs[3])
+    return d, k, e
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, acc, sd):
-    """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
-    forces are those of the field (zx, zy) (u(t) itself, or with the bonds' damping ``rate_field``).
-    With the body drag, each node's dissipation sd |u(t+dt) - u(t-dt)|^2 (sd = zeta/(4 dt)) is added to
-    its column's running total in ``acc`` (``kernels.budget``)."""
-    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
+def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, rated, energy):
+    """The loop of ``row_full``, for constant (damped, rated, energy): the compiler keeps one branch-free
+    loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
     xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
     ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
     xul, xur = zx[r + 1, j0 - 1 + s:j0 - 1 + s + n], zx[r + 1, j0 + s:j0 + s + n]
     yul, yur = zy[r + 1, j0 - 1 + s:j0 - 1 + s + n], zy[r + 1, j0 + s:j0 + s + n]
     xdl, xdr = zx[r - 1, j0 - 1 + s:j0 - 1 + s + n], zx[r - 1, j0 + s:j0 + s + n]
     ydl, ydr = zy[r - 1, j0 - 1 + s:j0 - 1 + s + n], zy[r - 1, j0 + s:j0 + s + n]
-    cx0, cy0 = cx[r, j0:j0 + n], cy[r, j0:j0 + n]
-    ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
-    # Two copies of the loop, so neither holds a branch: with zeta = 0 the damping factor is skipped.
-    if damped:
-        for k in range(n):
-            ux, uy = cx0[k], cy0[k]
-            fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
-                           ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
-            qx, qy = ox[k], oy[k]
+    cm, c0, cp = cx[r, j0 - 1:j0 - 1 + n], cx[r, j0:j0 + n], cx[r, j0 + 1:j0 + 1 + n]
+    dm, d0, dp = cy[r, j0 - 1:j0 - 1 + n], cy[r, j0:j0 + n], cy[r, j0 + 1:j0 + 1 + n]
+    cul, cur = cx[r + 1, j0 - 1 + s:j0 - 1 + s + n], cx[r + 1, j0 + s:j0 + s + n]
+    dul, dur = cy[r + 1, j0 - 1 + s:j0 - 1 + s + n], cy[r + 1, j0 + s:j0 + s + n]
+    cdl, cdr = cx[r - 1, j0 - 1 + s:j0 - 1 + s + n], cx[r - 1, j0 + s:j0 + s + n]
+    ddl, ddr = cy[r - 1, j0 - 1 + s:j0 - 1 + s + n], cy[r - 1, j0 + s:j0 + s + n]
+    ds = 0
+    ks = 0
+    es = 0
+    for k in range(n):
+        fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
+                       ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
+        if rated:
+            ux, uy = c0[k], d0[k]
+            gx, gy = fx, fy
+            if energy:
+                gx, gy = _full(ux, uy, cm[k], cp[k], dm[k], dp[k], cur[k], cdl[k], cul[k], cdr[k], dur[k], ddl[k],
+                               dul[k], ddr[k], kn, kt, a, b, c)
+        else:
+            ux, uy = x0[k], y0[k]
+            gx, gy = fx, fy
+        qx, qy = ox[k], oy[k]
+        if damped:
             nx = ux + (bb * (ux - qx) + fx)
             ny = uy + (bb * (uy - qy) + fy)
-            ox[k] = nx
-            oy[k] = ny
-            drag(acc, j0 + k, sd, nx - qx, ny - qy)
-    else:
-        for k in range(n):
-            ux, uy = cx0[k], cy0[k]
-            fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
-                           ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
-            ox[k] = ux + ((ux - ox[k]) + fx)
-            oy[k] = uy + ((uy - oy[k]) + fy)
+        else:
+            nx = ux + ((ux - qx) + fx)
+            ny = uy + ((uy - qy) + fy)
+        ox[k] = nx
+        oy[k] = ny
+        if damped and not energy:       # the common step: the body drag alone, its offset taken once below
+            dx, dy = float(nx) - float(qx), float(ny) - float(qy)
+            ds += raw((dx * dx + dy * dy) * cs[0])
+        elif damped or energy:
+            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, damped, energy)
+            ds += d
+            ks += kk
+            es += e
+    if damped and not energy:
+        ds -= n * MAGIC_BITS
+    return ds, ks, es
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, acc, sd):
+def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, rated, energy, cs):
+    """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
+    forces are those of the field (zx, zy) (u(t) itself, or with the bonds' dashpots ``rate_field``).
+    Returns the segment's exact shares of the budget (damping, kinetic, elastic; ``_budget``)."""
+    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
+    ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
+    # One call per combination, each with constant flags: a loop without branches for each.
+    if damped:
+        if energy:
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, True)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False)
+    if rated:
+        if energy:
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, True, True)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, True, False)
+    if energy:
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True)
+    return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False)
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def _edge_force(zx, zy, xm, x0, xp, ym, y0, yp, xp_, xq_, yp_, yq_, k, kn, kt, a, b, c):
+    """C F of a node of a block's top or bottom row, without external force (``row_edge``)."""
+    zx0, zy0 = x0[k], y0[k]
+    hx, hy = (xm[k] - zx0) + (xp[k] - zx0), (ym[k] - zy0) + (yp[k] - zy0)
+    dpx, dpy = xp_[k] - zx0, yp_[k] - zy0
+    dqx, dqy = xq_[k] - zx0, yq_[k] - zy0
+    return (kn * hx + a * (dpx + dqx) + b * (dpy - dqy),
+            kt * hy + b * (dpx - dqx) + c * (dpy + dqy))
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def _views(zx, zy, r, rr, j0, n, s, up):
+    """The neighbour views of a top (``up`` False) or bottom (``up`` True) row segment of the field z: same
+    row left, centre, right, and the diagonal pair, ``p`` along K_UR and ``q`` along K_UL."""
+    xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
+    ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
+    # The diagonal neighbour at c - 1 + s and the one at c + s.  Up: UL (K_UL) and UR (K_UR);
+    # down: DL (K_UR) and DR (K_UL).
+    xa, xb = zx[rr, j0 - 1 + s:j0 - 1 + s + n], zx[rr, j0 + s:j0 + s + n]
+    ya, yb = zy[rr, j0 - 1 + s:j0 - 1 + s + n], zy[rr, j0 + s:j0 + s + n]
+    if up:
+        return xm, x0, xp, ym, y0, yp, xb, xa, yb, ya
+    return xm, x0, xp, ym, y0, yp, xa, xb, ya, yb
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, rated, energy, cs):
     """Row segment of a block's top row (``up`` False: no up bonds) or bottom row (``up`` True: no down bonds).
 
     Adds C (ex + gx, ey + gy): the per-column external force (ex, ey), e.g.
     interface bonds, and the uniform one (gx, gy), e.g. the normal load.
+    Returns the segment's exact shares of the budget (``budget_shares``; the bulk forces alone).
     """
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     rr = r + 1 if up else r - 1
-    xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
-    ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
-    cx0, cy0 = cx[r, j0:j0 + n], cy[r, j0:j0 + n]
-    # The diagonal neighbour at c - 1 + s and the one at c + s.  Up: UL (K_UL) and UR (K_UR);
-    # down: DL (K_UR) and DR (K_UL).  ``p`` is the one along K_UR, ``q`` along K_UL.
-    xa, xb = zx[rr, j0 - 1 + s:j0 - 1 + s + n], zx[rr, j0 + s:j0 + s + n]
-    ya, yb = zy[rr, j0 - 1 + s:j0 - 1 + s + n], zy[rr, j0 + s:j0 + s + n]
+    xm, x0, xp, ym, y0, yp, xp_, xq_, yp_, yq_ = _views(zx, zy, r, rr, j0, n, s, up)
+    um, u0, up_, vm, v0, vp, up2, uq2, vp2, vq2 = _views(cx, cy, r, rr, j0, n, s, up)
     exs, eys = ex[j0:j0 + n], ey[j0:j0 + n]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
-    if up:
-        xp_, xq_, yp_, yq_ = xb, xa, yb, ya
-    else:
-        xp_, xq_, yp_, yq_ = xa, xb, ya, yb
     one = like(1, bb)
     damp = bb if damped else one
+    ds = 0
+    ks = 0
+    es = 0
     for k in range(n):
-        zx0, zy0 = x0[k], y0[k]
-        hx, hy = (xm[k] - zx0) + (xp[k] - zx0), (ym[k] - zy0) + (yp[k] - zy0)
-        dpx, dpy = xp_[k] - zx0, yp_[k] - zy0
-        dqx, dqy = xq_[k] - zx0, yq_[k] - zy0
-        fx = kn * hx + a * (dpx + dqx) + b * (dpy - dqy) + cf * (exs[k] + gx)
-        fy = kt * hy + b * (dpx - dqx) + c * (dpy + dqy) + cf * (eys[k] + gy)
-        ux, uy = cx0[k], cy0[k]
+        fx, fy = _edge_force(zx, zy, xm, x0, xp, ym, y0, yp, xp_, xq_, yp_, yq_, k, kn, kt, a, b, c)
+        ux, uy = u0[k], v0[k]
         qx, qy = ox[k], oy[k]
-        nx = ux + (damp * (ux - qx) + fx)
-        ny = uy + (damp * (uy - qy) + fy)
+        nx = ux + (damp * (ux - qx) + (fx + cf * (exs[k] + gx)))
+        ny = uy + (damp * (uy - qy) + (fy + cf * (eys[k] + gy)))
         ox[k] = nx
         oy[k] = ny
-        if damped:
-            drag(acc, j0 + k, sd, nx - qx, ny - qy)
+        if damped or energy:
+            hx, hy = fx, fy
+            if rated and energy:
+                hx, hy = _edge_force(cx, cy, um, u0, up_, vm, v0, vp, up2, uq2, vp2, vq2, k, kn, kt, a, b, c)
+            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, hx, hy, cs, damped, energy)
+            ds += d
+            ks += kk
+            es += e
+    return ds, ks, es
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy, acc, sd):
-    """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
+def masked_force(zx, zy, r, j, s, K, blk, mask):
+    """C F of node (r, j) from the field (zx, zy), with only the bonds in ``mask``.
 
     Without branches: a missing neighbour is read from the zero ghost cells
     around the block (or a real cell) and its difference weighed by 0.
     """
-    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
-    ux, uy = cx[r, j], cy[r, j]
+    kn, kt, a, b, c = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C]
     vx, vy = zx[r, j], zy[r, j]
-    wr, wur, wul = like(mask & R_, ux), like((mask & UR_) >> 1, ux), like((mask & UL_) >> 2, ux)
-    wl, wdl, wdr = like((mask & L_) >> 3, ux), like((mask & DL_) >> 4, ux), like((mask & DR_) >> 5, ux)
+    wr, wur, wul = like(mask & R_, vx), like((mask & UR_) >> 1, vx), like((mask & UL_) >> 2, vx)
+    wl, wdl, wdr = like((mask & L_) >> 3, vx), like((mask & DL_) >> 4, vx), like((mask & DR_) >> 5, vx)
     hx = wl * (zx[r, j - 1] - vx) + wr * (zx[r, j + 1] - vx)
     hy = wl * (zy[r, j - 1] - vy) + wr * (zy[r, j + 1] - vy)
     # Along K_UR: up-right and down-left; along K_UL: up-left and down-right.
@@ -168,16 +237,29 @@ def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, f
     dpy = wur * (zy[r + 1, j + s] - vy) + wdl * (zy[r - 1, j - 1 + s] - vy)
     dqx = wul * (zx[r + 1, j - 1 + s] - vx) + wdr * (zx[r - 1, j + s] - vx)
     dqy = wul * (zy[r + 1, j - 1 + s] - vy) + wdr * (zy[r - 1, j + s] - vy)
-    gx = kn * hx + a * (dpx + dqx) + b * (dpy - dqy) + cf * fx
-    gy = kt * hy + b * (dpx - dqx) + c * (dpy + dqy) + cf * fy
+    return (kn * hx + a * (dpx + dqx) + b * (dpy - dqy),
+            kt * hy + b * (dpx - dqx) + c * (dpy + dqy))
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy, rated, energy, cs):
+    """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
+    Returns its exact shares of the budget (``budget_shares``)."""
+    bb = K[blk, K_DAMP]
+    ux, uy = cx[r, j], cy[r, j]
+    gx, gy = masked_force(zx, zy, r, j, s, K, blk, mask)
     damp = bb if damped else like(1, bb)
     qx, qy = px[r, j], py[r, j]
-    nx = ux + (damp * (ux - qx) + gx)
-    ny = uy + (damp * (uy - qy) + gy)
+    nx = ux + (damp * (ux - qx) + (gx + cf * fx))
+    ny = uy + (damp * (uy - qy) + (gy + cf * fy))
     px[r, j] = nx
     py[r, j] = ny
-    if damped:
-        drag(acc, j, sd, nx - qx, ny - qy)
+    if not (damped or energy):
+        return 0, 0, 0
+    hx, hy = gx, gy
+    if rated and energy:
+        hx, hy = masked_force(cx, cy, r, j, s, K, blk, mask)
+    return budget_shares(ux, uy, qx, qy, nx, ny, hx, hy, cs, damped, energy)
 
 
 @njit(cache=True, _nrt=False, fastmath={"contract"})
