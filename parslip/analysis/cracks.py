@@ -75,7 +75,7 @@ import numpy as np
 
 from ..model.lattice import DIRECTIONS
 from ..model.physics import DENSITY
-from .fronts import front_field
+from .fronts import front_field, tip_values
 
 # Palmer & Rice (1973): the slip-weakening zone of a shear crack, Lambda = (9 pi / 16) M Gamma / tau_p^2.
 PALMER_RICE = 9.0 * math.pi / 16.0
@@ -362,8 +362,8 @@ def route1_blocker(run) -> tuple | None:
 
 def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
-    square of half-side r Lambda about the tip for each r of ``radii``, the tip at the stretch's fitted line,
-    the box centred on the interface.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
+    square of half-side r Lambda about the tip for each r of ``radii``, the tip the front's own at the
+    snapshot (``tip_at``), the box centred on the interface, V the stretch's speed.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
     "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}.  A snapshot whose largest box leaves the
     free part of either block is skipped before it is read, so a run whose blocks are thinner than the boxes
     costs nothing.  A run route 1 cannot read (``route1_blocker``) is refused with one line."""
@@ -380,7 +380,7 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     rows, r_max = [], max(radii) * lam
     for k in inside:
         t = float(times[k])
-        x_tip = float(st["x_at"](t))
+        x_tip = float(tip_at(front, t))
         centre = geo.box(x_tip, l, r_max)
         if centre is None:
             continue
@@ -398,19 +398,31 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     return rows
 
 
+def tip_at(front, t) -> np.ndarray:
+    """The tip's position x_tip(t) (l) at times t (l/c_r) along its own path: the arrivals (t, x) of
+    ``front.tip`` interpolated linearly, so exact at each break and within one site between two."""
+    return np.interp(np.asarray(t, float), np.asarray(front.tip["t"], float), np.asarray(front.tip["x"], float))
+
+
 def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
     """Route 2 on every interface frame inside the front's steady stretch: ``mode2_fit`` of /interface/sxy
-    over the sites xi = window[0] Lambda .. window[1] Lambda ahead of the tip (the stretch's fitted line), a
-    frame whose window leaves the contact skipped; G = ``field_g`` at the stretch's speed.  Rows {"t", "x_tip",
-    "V", "K_II" (rho c_r^2 a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}.  The frames are fitted together
-    (one array operation), and H(v) is computed once: the stretch has one speed."""
+    over the sites xi = window[0] Lambda .. window[1] Lambda ahead of the tip, a frame whose window leaves the
+    contact skipped; G = ``field_g`` at the stretch's speed.  Rows {"t", "x_tip", "V", "K_II" (rho c_r^2
+    a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}.  The frames are fitted together (one array operation),
+    and H(v) is computed once: the stretch has one speed.
+
+    The tip is the front's own at each frame (``tip_at``), not the stretch's fitted line: the fit puts the
+    singularity at xi = 0, so a tip misplaced by a few a (a front that speeds up or slows down over the
+    stretch departs from its line by that much) moves K_II by tens of percent at xi ~ Lambda, up and down
+    along the stretch.  H(v) varies slowly (a few percent over +-0.1 c_r at 0.8 c_r), the tip's position
+    does not."""
     lam, st, m = process_zone(run), steady_stretch(front), _material(run)
     c_r, l = float(run.attrs["c_r"]), float(run.attrs["l"])
     x, t = np.asarray(run.x, float), np.asarray(run.times, float)
     d = 1.0 if st["V"] >= 0 else -1.0
     want = int(math.floor((window[1] - window[0]) * lam * len(x) / l))     # sites a whole window holds, at least
     ks = np.flatnonzero((t >= st["t0"]) & (t <= st["t1"]))
-    x_tip = np.asarray(st["x_at"](t[ks]), float).reshape(-1)
+    x_tip = tip_at(front, t[ks]).reshape(-1)
     xi = d * (x[None, :] - x_tip[:, None]) * l
     sel = (xi >= window[0] * lam) & (xi <= window[1] * lam)
     whole = np.count_nonzero(sel, axis=1) >= want
@@ -609,3 +621,39 @@ def gamma_field(run, front) -> float | None:
 def gamma_source(run, front) -> str | None:
     g = _gamma(run, front)
     return None if g is None else g["source"]
+
+
+def _at_sites(front, x_tip, values) -> np.ndarray:
+    """``values`` measured with the tip at ``x_tip`` (l) placed at the nearest site of ``front.tip`` (the mean
+    where several fall on one site), NaN at every other site."""
+    xs = np.asarray(front.tip["x"], float)
+    out, count = np.zeros(len(xs)), np.zeros(len(xs))
+    if len(values):
+        site = np.abs(xs[None, :] - np.asarray(x_tip, float)[:, None]).argmin(axis=1)
+        np.add.at(out, site, np.asarray(values, float))
+        np.add.at(count, site, 1.0)
+    with np.errstate(invalid="ignore"):
+        return np.where(count > 0, out / np.maximum(count, 1.0), np.nan)
+
+
+@tip_values("cracks")
+def site_energies(run, front) -> dict:
+    """The per-front fields' per-site values along ``front.tip`` (m c_r^2 / a, NaN where not measured):
+    G_contour_inner, G_contour_outer at the site nearest the tip of each snapshot inside the steady stretch,
+    G_field at the site nearest the tip of each frame fitted (a frame every few sites), Gamma at every site
+    of the stretch.  The same rows the per-front means read, computed once."""
+    n = len(front.tip["x"])
+    out = {name: np.full(n, np.nan) for name in ("G_contour_inner", "G_contour_outer", "G_field", "Gamma")}
+    c = _contour_rows(run, front)
+    if c:
+        x = [r["x_tip"] for r in c]
+        out["G_contour_inner"] = _at_sites(front, x, [r["G"][0] for r in c])
+        out["G_contour_outer"] = _at_sites(front, x, [r["G"][-1] for r in c])
+    if g_field(run, front) is not None:
+        f = _memo(front, "field", lambda: field_g_run(run, front))
+        out["G_field"] = _at_sites(front, [r["x_tip"] for r in f], [r["G"] for r in f])
+    g = _gamma(run, front)
+    if g is not None:
+        st = steady_stretch(front)
+        out["Gamma"][st["lo"]:st["hi"]] = g["Gamma"]
+    return out
