@@ -188,6 +188,20 @@ def test_what_the_interface_takes_inside_each_contour():
     assert inner == pytest.approx(0.006, rel=0.02) and outer == pytest.approx(0.011, rel=0.02)
 
 
+def drawn_field_run(x, tip_t, t, K, tau0):
+    """A front whose tip reaches the sites x (l, one per a) at tip_t, and frames at t of tau = tau_0 + K_II /
+    sqrt(2 pi xi) ahead of the tip (``cracks.tip_at``), nothing behind, on the run's solid: (front, run, sxy)."""
+    n = len(x)
+    f = SimpleNamespace(tip={"x": x, "t": tip_t})
+    xi = (x[None, :] - cracks.tip_at(f, t)[:, None]) * n
+    sxy = np.where(xi > 0, tau0 + K / np.sqrt(2 * math.pi * np.maximum(xi, 1e-9)), 0.0)
+    scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
+             "material.bottom_kn": RUN_SOLID[0], "material.bottom_kt": RUN_SOLID[1]}
+    run = SimpleNamespace(attrs={"c_r": 1.0, "l": float(n)}, interface={"kx": np.full(n, 0.1), "sxy": sxy}, x=x,
+                          times=t, scene=scene)
+    return f, run, sxy
+
+
 def test_field_route_on_a_drawn_run():
     """Frames of a tip running at 0.6 c_r over 400 sites with tau = tau_0 + K_II / sqrt(2 pi xi) ahead of it:
     every frame of the steady stretch returns K_II, tau_0 and G = 1/2 H(v) K_II^2 of the Born continuum."""
@@ -195,13 +209,7 @@ def test_field_route_on_a_drawn_run():
     x = (np.arange(n) + 0.5) / n
     t = np.arange(0.0, 0.6, 0.01)
     tip_t = x / v                                     # the tip reaches each site centre at x / v
-    f = SimpleNamespace(tip={"x": x, "t": tip_t})
-    xi = (x[None, :] - v * t[:, None]) * n
-    sxy = np.where(xi > 0, tau0 + K / np.sqrt(2 * math.pi * np.maximum(xi, 1e-9)), 0.0)
-    scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
-             "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
-    run = SimpleNamespace(attrs={"c_r": 1.0, "l": float(n)}, interface={"kx": np.full(n, 0.1), "sxy": sxy}, x=x,
-                          times=t, scene=scene)
+    f, run, _ = drawn_field_run(x, tip_t, t, K, tau0)
     rows = cracks.field_g_run(run, f)
     assert len(rows) >= 20
     m = cracks._material(run)
@@ -219,13 +227,7 @@ def test_field_route_follows_an_accelerating_tip():
     x = (np.arange(n) + 0.5) / n
     tip_t = (np.sqrt(0.09 + 2 * 0.75 * x) - 0.3) / 0.75        # x = 0.3 t + 0.375 t^2 (l, l/c_r)
     t = np.arange(0.0, tip_t[-1], 0.01)
-    f = SimpleNamespace(tip={"x": x, "t": tip_t})
-    xi = (x[None, :] - cracks.tip_at(f, t)[:, None]) * n
-    sxy = np.where(xi > 0, tau0 + K / np.sqrt(2 * math.pi * np.maximum(xi, 1e-9)), 0.0)
-    scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
-             "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
-    run = SimpleNamespace(attrs={"c_r": 1.0, "l": float(n)}, interface={"kx": np.full(n, 0.1), "sxy": sxy}, x=x,
-                          times=t, scene=scene)
+    f, run, sxy = drawn_field_run(x, tip_t, t, K, tau0)
     rows = cracks.field_g_run(run, f)
     assert len(rows) >= 20
     assert all(r["K_II"] == pytest.approx(K, rel=1e-6) and r["tau_0"] == pytest.approx(tau0, rel=1e-6) for r in rows)

@@ -372,8 +372,9 @@ def route1_blocker(run) -> tuple | None:
 def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
     square of half-side r Lambda about the tip for each r of ``radii``, the tip the front's own at the
-    snapshot (``tip_at``), the box centred on the interface, V the stretch's speed.  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r), "G" (list, one per radius),
-    "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}.  A snapshot whose largest box leaves the
+    snapshot (``tip_at``), the box centred on the interface, V the stretch's speed.  Rows {"t" (l/c_r),
+    "x_tip" (l), "V" (c_r), "G" (list, one per radius), "radii" (a), "parts" (``contour_flux``'s dicts,
+    internal units)}.  A snapshot whose largest box leaves the
     free part of either block is skipped before it is read, so a run whose blocks are thinner than the boxes
     costs nothing.  A run route 1 cannot read (``route1_blocker``) is refused with one line."""
     from ..io import contract
