@@ -66,6 +66,9 @@ class FrontField:
 
 
 FIELDS: dict[str, FrontField] = {}
+# Per-site measures other modules add to ``tip`` in the JSON (``tip_values``): name -> measure(run, front),
+# which returns {key: array with one entry per site of front.tip, NaN where not measured}.
+TIP_VALUES: dict[str, Callable] = {}
 
 
 def declare(name: str, units: str, doc: str, col: str | None = None, fmt: str = "",
@@ -75,6 +78,17 @@ def declare(name: str, units: str, doc: str, col: str | None = None, fmt: str = 
         raise ValueError(f"front field {name!r} declared twice")
     src = measure.__module__.replace("parslip.", "") if measure is not None else "analysis.fronts"
     FIELDS[name] = FrontField(name, units, doc, measure, col, fmt, src)
+
+
+def tip_values(name: str):
+    """Decorator: register ``measure(run, front)`` whose per-site arrays (one entry per site the tip reached,
+    NaN where not measured) join ``tip`` in ``Front.to_dict`` (the --json output) under their own keys."""
+    def register(measure):
+        if name in TIP_VALUES:
+            raise ValueError(f"tip values {name!r} registered twice")
+        TIP_VALUES[name] = measure
+        return measure
+    return register
 
 
 def front_field(name: str, units: str, doc: str, col: str | None = None, fmt: str = ""):
@@ -120,7 +134,9 @@ for _name, _units, _doc, _col, _fmt in (
         ("tip", "-", "arrays along the tip trajectory, one entry per site reached: t (arrival), step (its drive "
          "step; from events only), frame (the first frame that shows the break), x, v (local speed, NaN in a "
          "burst), w (width, a), du, dv (slip carried at that site, l), u_behind, v_behind (displacement of "
-         "the site behind the tip at its arrival, from t = 0, l)", None, "")):
+         "the site behind the tip at its arrival, from t = 0, l); in the JSON also the per-site measures other "
+         "modules register (``tip_values``: analysis.cracks adds G_contour_inner, G_contour_outer, G_field and "
+         "Gamma, m c_r^2/a, null where not measured)", None, "")):
     declare(_name, _units, _doc, _col, _fmt)
 
 
@@ -253,6 +269,9 @@ class Front:
         for name in FIELDS:
             v = self.field(name)
             if name == "tip":
+                v = dict(v)
+                for measure in TIP_VALUES.values():
+                    v.update(measure(self.run, self) if self.run is not None else {})
                 v = {k: [json_value(float(x)) for x in a] for k, a in v.items()}
             d[name] = v if isinstance(v, (list, dict)) else json_value(v)
         return d
