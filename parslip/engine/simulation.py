@@ -147,14 +147,14 @@ class Simulation:
         chunk = self.chunk
         while True:
             self._snapshot(writer)
+            if self.n >= end:          # a stop asked for at the last step finds the run complete, not stopped
+                break
             if control is not None:
                 action, steps = control.agree(self)
                 chunk = steps or chunk
                 if action is not None:
                     self._flush(writer)
                     return action
-            if self.n >= end:
-                break
             target = min(end, self.n + chunk, min((k for k in self._snap if k > self.n), default=end),
                          control.next_stop(self.n) if control is not None else end,
                          st.n_drive_start if self.n < st.n_drive_start else end)
