@@ -72,10 +72,11 @@ class Cluster:
 
 
 @pytest.fixture(scope="module")
-def batch_numba_cache(tmp_path_factory):
-    """One numba cache for the module's batch jobs, as a cluster's shared NUMBA_CACHE_DIR would be: the
-    first job compiles the loop (about 40 s), the others load it."""
-    return tmp_path_factory.mktemp("numba-cache")
+def batch_numba_cache():
+    """The batch jobs' NUMBA_CACHE_DIR, shared as a cluster's would be: the session's kernel cache
+    (tests/conftest.py), so the jobs load the loop the suite has compiled; were it cold, the first job's
+    warm-up would compile it (about 40 s) and every later job load it."""
+    return Path(os.environ["NUMBA_CACHE_DIR"])
 
 
 @pytest.fixture
@@ -93,13 +94,23 @@ def _v0(path):
         return tomllib.loads(f.attrs["scene"])["drive"]["v0"]
 
 
-def test_single_run(cluster):
-    job = cluster.sbatch("--ntasks=2", SLURM / "parslip.sbatch", cluster.scene, "", "--set", "drive.v0=0.03")
+def _kernel_indexes(folder: Path) -> set:
+    return set(folder.rglob("*.nbi")) if folder.is_dir() else set()
+
+
+def test_single_run(cluster, tmp_path):
+    """The job's kernels come from NUMBA_CACHE_DIR: none is compiled where parslip would keep them
+    without it (PARSLIP_CACHE_DIR, empty here) or where env.sh's default would (the checkout's)."""
+    fallback, beside = tmp_path / "parslip-cache", REPO / ".numba-cache"
+    before = _kernel_indexes(beside)
+    job = cluster.sbatch("--ntasks=2", SLURM / "parslip.sbatch", cluster.scene, "", "--set", "drive.v0=0.03",
+                         PARSLIP_CACHE_DIR=str(fallback))
     log = cluster.log(f"parslip-{job}.log")
     out = cluster.out / f"tiny-{job}.vtkhdf"
     assert _status(out) == ("complete", 2), log
     assert "ranks            1 to" in log          # parslip info ran first
     assert any(cluster.numba_cache.rglob("*.nbi")), "numba cache not in NUMBA_CACHE_DIR"
+    assert not _kernel_indexes(fallback) and _kernel_indexes(beside) == before, "kernels compiled elsewhere"
     assert _v0(out) == 0.03
 
 
@@ -161,10 +172,9 @@ def test_restart_chain_continues_to_the_end(cluster, tmp_path):
 def test_sweep_as_a_job_array_of_shards(cluster):
     """Two array tasks of 2 ranks each (one point per rank) share a 5-point sweep by shards: every point
     runs once, in its own file, and the last task's summary holds all five; resubmitted, nothing reruns.
-    The kernels come from the checkout's batch cache (slurm/env.sh's default), compiled once for good."""
+    The kernels come from the module's shared NUMBA_CACHE_DIR."""
     (cluster.dir / "sweep.toml").write_text('base = "tiny.toml"\n[set]\n"drive.duration" = 2.0\n'
                                             '[grid]\n"load.FN" = [0.5, 1.0, 1.5, 2.0, 2.5]\n')
-    cluster.env["NUMBA_CACHE_DIR"] = str(REPO / ".numba-cache")
     job = cluster.sbatch("--array=0-1", "--ntasks=2", SLURM / "sweep.sbatch", "sweep.toml")
     out = cluster.out / "sweep"
     ran = []
