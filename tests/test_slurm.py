@@ -147,7 +147,8 @@ def test_scaling_study_writes_its_table(cluster):
 
 def test_restart_chain_continues_to_the_end(cluster, tmp_path):
     """Links stop after 3 s each (about 8 s of stepping in all, on 2 ranks here); the chain ends with
-    the same datasets as one uninterrupted run, and the links left over find the run complete."""
+    the same datasets as one uninterrupted run, and the links left over find the run complete and start
+    no ranks."""
     out = cluster.out / "chain.vtkhdf"
     cluster.out.mkdir(exist_ok=True)
     long = {"drive.duration": 4000.0, "drive.v0": 0.001}
@@ -159,6 +160,7 @@ def test_restart_chain_continues_to_the_end(cluster, tmp_path):
     logs = [cluster.log(f"parslip-chain-{j}.log") for j in ids]
     assert "checkpointed at step" in logs[0], logs[0]
     assert _status(out)[0] == "complete", logs[-1]
+    assert "the run is complete; nothing left to do" in logs[-1] and "INFO" not in logs[-1], logs[-1]
     ref = tmp_path / "ref.vtkhdf"
     p = subprocess.run([WHEEL_MPIEXEC, "-n", "2", sys.executable, "-m", "parslip", "run", str(scene), "--out", str(ref),
                         "--no-png", "--quiet"], env=cluster.env, capture_output=True, text=True, timeout=600)
