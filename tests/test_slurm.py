@@ -146,12 +146,15 @@ def test_scaling_study_writes_its_table(cluster):
 
 
 def test_restart_chain_continues_to_the_end(cluster, tmp_path):
-    """Links stop after 3 s each (about 8 s of stepping in all, on 2 ranks here); the chain ends with
-    the same datasets as one uninterrupted run, and the links left over find the run complete and start
-    no ranks."""
+    """Links stop after 3 s each; the chain ends with the same datasets as one uninterrupted run, and the
+    links left over find the run complete and start no ranks.
+
+    625,000 steps: 4 to 12 s of stepping on 2 ranks (150,000 to 50,000 steps/s, idle to loaded host),
+    so the first link cannot finish, and with 100,000 to 200,000 steps a link the 8 leave surplus links
+    on a loaded host too (a link whose ranks take the 3 s to start makes no progress)."""
     out = cluster.out / "chain.vtkhdf"
     cluster.out.mkdir(exist_ok=True)
-    long = {"drive.duration": 4000.0, "drive.v0": 0.001}
+    long = {"drive.duration": 2000.0, "drive.v0": 0.001}
     scene = cluster.dir / "long.toml"
     scene.write_text(small_toml(**long))
     ids = cluster.run("bash", SLURM / "submit-chain.sh", scene, out, "8", PARSLIP_STOP_AFTER="00:00:03",
