@@ -28,6 +28,22 @@ def _mpi_launcher_first_on_path() -> None:
 
 _mpi_launcher_first_on_path()
 
+
+def _one_kernel_cache_for_the_session() -> None:
+    """Point every process the tests start at the kernel cache this process uses (NUMBA_CACHE_DIR).
+
+    Without it the kernels' folder follows PARSLIP_CACHE_DIR, which tests set to a fresh directory for an
+    omega_max cache of their own: each of their subprocesses, and each rank of an MPI run at once,
+    then compiled the time loop from nothing (about 40 s of a core apiece, minutes on a loaded host).
+    The folder is keyed by the kernels' sources (io.cache.kernel_cache_dir), so sharing it never
+    serves a stale kernel.  A NUMBA_CACHE_DIR set by the caller is kept.
+    """
+    from parslip.io.cache import kernel_cache_dir
+    os.environ.setdefault("NUMBA_CACHE_DIR", os.path.dirname(kernel_cache_dir()))
+
+
+_one_kernel_cache_for_the_session()
+
 # SMALL driven long enough for three to four pulses from the rear edge.
 SMALL_RUN = {"drive.duration": 10.0, "output.snapshots": 4}
 

@@ -72,10 +72,11 @@ class Cluster:
 
 
 @pytest.fixture(scope="module")
-def batch_numba_cache(tmp_path_factory):
-    """One numba cache for the module's batch jobs, as a cluster's shared NUMBA_CACHE_DIR would be: the
-    first job compiles the loop (about 40 s), the others load it."""
-    return tmp_path_factory.mktemp("numba-cache")
+def batch_numba_cache():
+    """The batch jobs' NUMBA_CACHE_DIR, shared as a cluster's would be: the session's kernel cache
+    (tests/conftest.py), so the jobs load the loop the suite has compiled; were it cold, the first job's
+    warm-up would compile it (about 40 s) and every later job load it."""
+    return Path(os.environ["NUMBA_CACHE_DIR"])
 
 
 @pytest.fixture
@@ -93,13 +94,23 @@ def _v0(path):
         return tomllib.loads(f.attrs["scene"])["drive"]["v0"]
 
 
-def test_single_run(cluster):
-    job = cluster.sbatch("--ntasks=2", SLURM / "parslip.sbatch", cluster.scene, "", "--set", "drive.v0=0.03")
+def _kernel_indexes(folder: Path) -> set:
+    return set(folder.rglob("*.nbi")) if folder.is_dir() else set()
+
+
+def test_single_run(cluster, tmp_path):
+    """The job's kernels come from NUMBA_CACHE_DIR: none is compiled where parslip would keep them
+    without it (PARSLIP_CACHE_DIR, empty here) or where env.sh's default would (the checkout's)."""
+    fallback, beside = tmp_path / "parslip-cache", REPO / ".numba-cache"
+    before = _kernel_indexes(beside)
+    job = cluster.sbatch("--ntasks=2", SLURM / "parslip.sbatch", cluster.scene, "", "--set", "drive.v0=0.03",
+                         PARSLIP_CACHE_DIR=str(fallback))
     log = cluster.log(f"parslip-{job}.log")
     out = cluster.out / f"tiny-{job}.vtkhdf"
     assert _status(out) == ("complete", 2), log
     assert "ranks            1 to" in log          # parslip info ran first
     assert any(cluster.numba_cache.rglob("*.nbi")), "numba cache not in NUMBA_CACHE_DIR"
+    assert not _kernel_indexes(fallback) and _kernel_indexes(beside) == before, "kernels compiled elsewhere"
     assert _v0(out) == 0.03
 
 
@@ -135,19 +146,25 @@ def test_scaling_study_writes_its_table(cluster):
 
 
 def test_restart_chain_continues_to_the_end(cluster, tmp_path):
-    """Links stop after 3 s each (about 8 s of stepping in all, on 2 ranks here); the chain ends with
-    the same datasets as one uninterrupted run, and the links left over find the run complete."""
+    """Links stop after 3 s each; the chain ends with the same datasets as one uninterrupted run, and the
+    links left over find the run complete and start no ranks.
+
+    937,000 steps: 6 to 19 s of stepping on 2 ranks (150,000 to 50,000 steps/s, idle to loaded host).
+    A link steps up to 400,000 of them on an idle host, so the first cannot finish, and 100,000 to
+    200,000 on a loaded one (none when its ranks take the 3 s to start), so 12 links leave surplus
+    links there too; a surplus link costs a second."""
     out = cluster.out / "chain.vtkhdf"
     cluster.out.mkdir(exist_ok=True)
-    long = {"drive.duration": 4000.0, "drive.v0": 0.001}
+    long = {"drive.duration": 3000.0, "drive.v0": 0.001}
     scene = cluster.dir / "long.toml"
     scene.write_text(small_toml(**long))
-    ids = cluster.run("bash", SLURM / "submit-chain.sh", scene, out, "8", PARSLIP_STOP_AFTER="00:00:03",
+    ids = cluster.run("bash", SLURM / "submit-chain.sh", scene, out, "12", PARSLIP_STOP_AFTER="00:00:03",
                       PARSLIP_SBATCH_ARGS="--ntasks=2").stdout.split()
-    assert len(ids) == 8
+    assert len(ids) == 12
     logs = [cluster.log(f"parslip-chain-{j}.log") for j in ids]
     assert "checkpointed at step" in logs[0], logs[0]
     assert _status(out)[0] == "complete", logs[-1]
+    assert "the run is complete; nothing left to do" in logs[-1] and "INFO" not in logs[-1], logs[-1]
     ref = tmp_path / "ref.vtkhdf"
     p = subprocess.run([WHEEL_MPIEXEC, "-n", "2", sys.executable, "-m", "parslip", "run", str(scene), "--out", str(ref),
                         "--no-png", "--quiet"], env=cluster.env, capture_output=True, text=True, timeout=600)
@@ -161,10 +178,9 @@ def test_restart_chain_continues_to_the_end(cluster, tmp_path):
 def test_sweep_as_a_job_array_of_shards(cluster):
     """Two array tasks of 2 ranks each (one point per rank) share a 5-point sweep by shards: every point
     runs once, in its own file, and the last task's summary holds all five; resubmitted, nothing reruns.
-    The kernels come from the checkout's batch cache (slurm/env.sh's default), compiled once for good."""
+    The kernels come from the module's shared NUMBA_CACHE_DIR."""
     (cluster.dir / "sweep.toml").write_text('base = "tiny.toml"\n[set]\n"drive.duration" = 2.0\n'
                                             '[grid]\n"load.FN" = [0.5, 1.0, 1.5, 2.0, 2.5]\n')
-    cluster.env["NUMBA_CACHE_DIR"] = str(REPO / ".numba-cache")
     job = cluster.sbatch("--array=0-1", "--ntasks=2", SLURM / "sweep.sbatch", "sweep.toml")
     out = cluster.out / "sweep"
     ran = []

@@ -253,13 +253,21 @@ def test_a_point_left_running_by_a_job_the_watchdog_ended_is_failed_on_resume(he
 
 
 def test_a_hang_the_watchdog_ends_fails_its_point_and_the_resumed_sweep_runs_the_rest(here):
-    """Two ranks per point; rank 1 stops (SIGSTOP, the test hook) in p000's drive: the watchdog (6 s)
-    ends the job (exit 3) and marks p000's file failed.  The sweep run again marks p000 failed, not run
-    again, and runs p001."""
+    """Two ranks per point; rank 1 stops (SIGSTOP, the test hook) where p000's drive starts: the watchdog
+    (6 s) ends the job (exit 3) and marks p000's file failed.  The sweep run again marks p000 failed, not
+    run again, and runs p001.
+
+    The hook acts at an agreement of the ranks, and past the drive's start the ranks agree only every
+    half second of work, which is the rest of this short run: the one agreement every run makes in its
+    drive is at the drive's first step (the loop stops there to start the drive clock)."""
     path = _write(here / "s.toml", 'base = "tiny.toml"\nranks_per_point = 2\n[set]\n"run.watchdog" = 6.0\n'
                                    '[grid]\n"load.FN" = [1.0, 0.5]\n')
+    from parslip.scene.derive import derive
+    from parslip.scene.load import load
+    drive_start = derive(load(str(here / "tiny.toml"), {"load.FN": 1.0})).n_drive_start
     env = {"PARSLIP_CACHE_DIR": os.environ["PARSLIP_CACHE_DIR"]}
-    p = run_limited_here(here, 2, "sweep", path, "-o", "out", env={**env, "PARSLIP_TEST_HOOKS": "stop_at=1:1500"})
+    p = run_limited_here(here, 2, "sweep", path, "-o", "out",
+                         env={**env, "PARSLIP_TEST_HOOKS": f"stop_at=1:{drive_start}"})
     assert p.returncode == 3, p.stderr[-3000:]
     assert "watchdog" in p.stderr and not (here / "out" / "summary.csv").exists()
     p0, p1 = S.load_sweep(path).points
