@@ -321,14 +321,7 @@ class Output:
             values = st.law.site_values(ns)
             for name in SITE_DATASETS[1:]:          # after x: the bond table's rows written once per site
                 g[name][...] = values[name]
-        en = self._handles[ENERGY] = f.create_group(ENERGY)
-        en.attrs["units"] = "m c_r^2"
-        for name, meaning in ENERGY_DATASETS.items():
-            ds = en.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=np.float64, chunks=(max(rows, 64),),
-                                   dcpl=_early())
-            ds.attrs["units"] = "m c_r^2"
-            ds.attrs["meaning"] = meaning
-            self._handles[f"{ENERGY}/{name}"] = ds
+        self._create_energy(nf, rows)
         ev = self._handles[f"interface/{EVENTS}"] = g.create_group(EVENTS)
         ev.attrs["events_written"] = 0
         ev.attrs["site_column0"] = int(st.lattice.top.col0)
@@ -352,6 +345,17 @@ class Output:
                 chunks=(self._chunk_rows(name, shape),) + shape[1:], dcpl=_early())
         self._ds("VTKHDF/Steps").attrs["NSteps"] = np.int64(0)
         self._step_constants(0, S)
+
+    def _create_energy(self, nf: int, rows: int):
+        """The /energy group: one value per frame of each budget term (``contract.ENERGY_DATASETS``)."""
+        en = self._handles[ENERGY] = self.f.create_group(ENERGY)
+        en.attrs["units"] = "m c_r^2"
+        for name, meaning in ENERGY_DATASETS.items():
+            ds = en.create_dataset(name, shape=(nf,), maxshape=(None,), dtype=np.float64, chunks=(max(rows, 64),),
+                                   dcpl=_early())
+            ds.attrs["units"] = "m c_r^2"
+            ds.attrs["meaning"] = meaning
+            self._handles[f"{ENERGY}/{name}"] = ds
 
     def _step_constants(self, k0: int, k1: int):
         """Per-step constants of snapshots k0..k1-1 (one part, N points, M line cells, offsets into the flat
