@@ -82,21 +82,24 @@ def budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, damped, energy):
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, rated, energy):
-    """The loop of ``row_full``, for constant (damped, rated, energy): the compiler keeps one branch-free
-    loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
+def _six(zx, zy, r, j0, n, s):
+    """Views of a row segment of the field z and of its six neighbours: left, centre, right, then up-left,
+    up-right, down-left, down-right (x, y of each)."""
     xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
     ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
     xul, xur = zx[r + 1, j0 - 1 + s:j0 - 1 + s + n], zx[r + 1, j0 + s:j0 + s + n]
     yul, yur = zy[r + 1, j0 - 1 + s:j0 - 1 + s + n], zy[r + 1, j0 + s:j0 + s + n]
     xdl, xdr = zx[r - 1, j0 - 1 + s:j0 - 1 + s + n], zx[r - 1, j0 + s:j0 + s + n]
     ydl, ydr = zy[r - 1, j0 - 1 + s:j0 - 1 + s + n], zy[r - 1, j0 + s:j0 + s + n]
-    cm, c0, cp = cx[r, j0 - 1:j0 - 1 + n], cx[r, j0:j0 + n], cx[r, j0 + 1:j0 + 1 + n]
-    dm, d0, dp = cy[r, j0 - 1:j0 - 1 + n], cy[r, j0:j0 + n], cy[r, j0 + 1:j0 + 1 + n]
-    cul, cur = cx[r + 1, j0 - 1 + s:j0 - 1 + s + n], cx[r + 1, j0 + s:j0 + s + n]
-    dul, dur = cy[r + 1, j0 - 1 + s:j0 - 1 + s + n], cy[r + 1, j0 + s:j0 + s + n]
-    cdl, cdr = cx[r - 1, j0 - 1 + s:j0 - 1 + s + n], cx[r - 1, j0 + s:j0 + s + n]
-    ddl, ddr = cy[r - 1, j0 - 1 + s:j0 - 1 + s + n], cy[r - 1, j0 + s:j0 + s + n]
+    return xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, rated, energy):
+    """The loop of ``row_full``, for constant (damped, rated, energy): the compiler keeps one branch-free
+    loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
+    xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr = _six(zx, zy, r, j0, n, s)
+    cm, c0, cp, dm, d0, dp, cul, cur, dul, dur, cdl, cdr, ddl, ddr = _six(cx, cy, r, j0, n, s)
     ds = 0
     ks = 0
     es = 0
