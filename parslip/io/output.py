@@ -24,8 +24,8 @@ from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, STATUS,
-                       TIMING_PREFIX, put_status, status_value)
+from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS,
+                       PER_FRAME_1D, SITE_DATASETS, STATUS, TIMING_PREFIX, put_status, status_value)
 from .scenefile import to_toml
 
 VTK_LINE = 3

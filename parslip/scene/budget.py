@@ -18,8 +18,8 @@ import dataclasses
 import numpy as np
 
 from .memory import predict
-from ..io.contract import (EVENT_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS,
-                           STATUS_BYTES)
+from ..io.contract import (ENERGY_DATASETS, EVENT_DATASETS, FRAME_FIELDS, INTERFACE_DATASETS, PER_FRAME_1D,
+                           SITE_DATASETS, STATUS_BYTES)
 from ..model.lattice import BOTTOM, Lattice
 from .schema import SCHEMA
 
@@ -63,7 +63,8 @@ def output_bytes(st) -> dict:
     """Bytes of data in the run file: {'interface': ..., 'snapshots': ..., 'total': ...}.
 
     interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame for each
-    of time, step, friction_force, drive_force and mu + 8 per site for each of x, kx, ky, delta_b; snapshots: each holds every node
+    of time, step, friction_force, drive_force and mu and each term of the energy budget + 8 per site for
+    each of x, kx, ky, delta_b; snapshots: each holds every node
     (72 B) and every bond as a line cell (27 B: bulk bonds and one per interface site) and a few offsets.
     The run's status (``STATUS_BYTES``, written whole when the file is made) is in the total; the bond
     events add ``EVENT_FILE_BYTES`` per event on top: how many the run makes depends on its physics, so
@@ -72,7 +73,8 @@ def output_bytes(st) -> dict:
     lat = st.lattice
     frames, sites = st.n_frames, lat.n_top_sites
     per_site = sum(INTERFACE_DATASETS[name][0]().itemsize for name in FRAME_FIELDS)
-    iface = frames * sites * per_site + frames * 8 * len(PER_FRAME_1D) + sites * 8 * len(SITE_DATASETS)
+    iface = (frames * sites * per_site + frames * 8 * (len(PER_FRAME_1D) + len(ENERGY_DATASETS))
+             + sites * 8 * len(SITE_DATASETS))
     cells = bulk_cells(lat) + sites
     snaps = st.n_snapshots * (lat.n_nodes * SNAPSHOT_NODE_BYTES + cells * SNAPSHOT_CELL_BYTES
                               + SNAPSHOT_FIXED_BYTES)
