@@ -149,7 +149,7 @@ def test_the_engine_keeps_the_budget_computed_from_outside(tmp_path, form):
     ``kernels.exact``).  With the bonds' dashpots the damping is the balance, checked against their work
     summed from outside."""
     over = {**SMALL, "drive.mode": "shear", "time.damping": form, "drive.v0": 0.05, "drive.duration": 2.0,
-            "output.snapshots": 0}
+            "output.snapshots": 0, "output.energy": "checked"}
     e = _engine_budget(tmp_path, over)
     st = derive(scene(**over))
     k = 20                                       # a frame well into the drive, after bonds broke
@@ -167,3 +167,25 @@ def test_the_engine_keeps_the_budget_computed_from_outside(tmp_path, form):
         assert np.all(np.abs(e["residual"]) <= 1e-9 * np.max(e["work_drive"]))
     else:           # the dashpots' work is the balance of the others (``Simulation.budget_frames``)
         assert np.isnan(e["residual"]).all()
+
+
+def test_the_balance_is_the_checked_damping(tmp_path):
+    """``output.energy = "balance"`` (the default) writes as damping what the other terms leave, and the
+    residual as NaN; it equals the damping "checked" sums node by node to 1e-9 of the drive's work, and
+    every other dataset of the two runs is the same bits (summing the drag leaves the state alone)."""
+    from helpers import datasets
+    over = {**SMALL, "drive.mode": "pull", "output.snapshots": 0}
+    runs = {}
+    for mode in ("balance", "checked"):
+        d = tmp_path / mode
+        d.mkdir()
+        runs[mode] = _engine_budget(d, {**over, "output.energy": mode})
+    bal, chk = runs["balance"], runs["checked"]
+    work = np.max(chk["work_drive"])
+    assert np.isnan(bal["residual"]).all() and np.isfinite(chk["residual"]).all()
+    assert np.max(np.abs(bal["damping"] - chk["damping"])) < 1e-9 * work and chk["damping"][-1] > 0.01 * work
+    a, b = datasets(tmp_path / "balance" / "e.vtkhdf")[0], datasets(tmp_path / "checked" / "e.vtkhdf")[0]
+    assert a.keys() == b.keys()
+    for name in a:
+        if name not in ("energy/damping", "energy/residual"):
+            assert a[name].tobytes() == b[name].tobytes(), name

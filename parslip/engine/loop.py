@@ -95,10 +95,11 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   dt, v0, fext, jump      time step (a/c), drive speed (a c/a), load per node at full F_N, runaway limit (a)
 #   cf, inv_cf, damped      C = dt^2/(1 + zeta dt/2) in the state's float type, 1/C, zeta > 0
 #   rated                   the bonds' damping: bond forces are taken on z = u + g (u - u_prev) (``K_RATE``)
+#   drag                    the kernels sum the body drag's dissipation every step (``output.energy = "checked"``)
 #   event_limit             events a rank may hold at an agreement before every rank returns EVENTS_FULL
 #   spring, v0dt            the loader spring k_s (m c^2/a^2, with DRIVE_SPRING) and v0 dt (a), in the float type
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
-                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated")
+                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated drag")
 
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
@@ -182,7 +183,7 @@ def _drive(cx, cy, zx, zy, px, py, r, j, s, mask, K, blk, drive, drive_on, shift
     fux, fuy = px[r, j], py[r, j]            # unused unless on a frame's step: the body drag needs no force
     if energy:
         fux, fuy = masked_force(cx, cy, r, j, s, K, blk, mask)
-    return budget_shares(cx[r, j], cy[r, j], x0, y0, px[r, j], py[r, j], fux, fuy, bud.cs, prm.damped, energy)
+    return budget_shares(cx[r, j], cy[r, j], x0, y0, px[r, j], py[r, j], fux, fuy, bud.cs, prm.drag, energy)
 
 
 @njit(cache=True, _nrt=False, fastmath={'contract'})
@@ -191,7 +192,7 @@ def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, z
     """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y).  Their
     exact shares of the budget go to ``bud.acc`` (``kernels.budget``)."""
     cf = prm.cf
-    damped, rated = prm.damped, prm.rated
+    damped, drag, rated = prm.damped, prm.drag, prm.rated
     cs = bud.cs
     zero = like(0, cf)
     ds = 0
@@ -202,14 +203,14 @@ def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, z
         r, j0, n, s = tk.row, tk.j0, tk.n, tk.s
         g = gy if tk.load else zero
         if tk.kind == FULL:
-            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, rated, energy,
-                               cs)
+            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, drag, rated,
+                               energy, cs)
         elif tk.extra:
             d, k, e = row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped,
-                               tk.kind == NO_DOWN, cf, ex, ey, zero, g, rated, energy, cs)
+                               tk.kind == NO_DOWN, cf, ex, ey, zero, g, drag, rated, energy, cs)
         else:
             d, k, e = row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped,
-                               tk.kind == NO_DOWN, cf, zeros, zeros, zero, g, rated, energy, cs)
+                               tk.kind == NO_DOWN, cf, zeros, zeros, zero, g, drag, rated, energy, cs)
         if tk.drive and drive_on:        # a driven row (T0): every node's share taken on its final u(n+1)
             mask = bg.ALL if tk.kind == FULL else (bg.NO_UP_MASK if tk.kind == NO_UP else bg.NO_DOWN_MASK)
             d = k = e = 0
@@ -238,7 +239,7 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
            energy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
     cf = prm.cf
-    damped, rated = prm.damped, prm.rated
+    damped, drag, rated = prm.damped, prm.drag, prm.rated
     cs = bud.cs
     zero = like(0, cf)
     ds = 0
@@ -248,13 +249,13 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
         tk = tasks[t]
         r, j, s = tk.row, tk.j0, tk.s
         if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, rated, energy,
-                               cs)   # interior node, slab edge
+            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, drag, rated,
+                               energy, cs)   # interior node, slab edge
         else:
             fx = ex[j] if tk.extra else zero
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
             d, k, e = node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx,
-                                  fy, rated, energy, cs)
+                                  fy, drag, rated, energy, cs)
         if tk.drive and drive_on and drive.index[r, j] >= 0:
             d, k, e = _drive(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, tk.mask, K, tk.block, drive, drive_on,
                              shift, prm, bud, energy)

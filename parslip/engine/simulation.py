@@ -62,6 +62,7 @@ class Simulation:
             fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
             cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=st.damping.damped,
             event_limit=self.event_limit, spring=self.dtype.type(st.drive.spring), rated=st.damping.rated,
+            drag=st.damping.damped and sc["output.energy"] == "checked",
             v0dt=self.dtype.type(st.v0 * st.dt))
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
@@ -322,7 +323,8 @@ class Simulation:
     def budget_frames(self, count: int) -> dict | None:
         """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started:
         work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual (contract
-        ``ENERGY_DATASETS``); collective.  The state's terms at the drive's start come from its frame
+        ``ENERGY_DATASETS``); collective.  The damping is summed in the loop with ``output.energy =
+        "checked"`` and the body drag, else it is the balance and the residual NaN.  The state's terms at the drive's start come from its frame
         (or from the checkpoint a run continues); without them (a checkpoint that predates the budget)
         they read NaN."""
         fr = self.frames
@@ -340,12 +342,13 @@ class Simulation:
                "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[2]) * e}
         balance = (out["work_drive"] + out["work_normal"] + out["formed"]
                    - (out["elastic"] + out["kinetic"] + out["broken"]))
-        if self.setup.damping.rated:
-            # The bonds' dashpots: their work would take a second stencil pass every step (twice the step's
-            # cost), so it is what the other terms leave, and the residual is not measured.
-            out["damping"], out["residual"] = balance, np.full(count, np.nan)
-        else:
+        if self.params.drag or self.setup.damping.zeta == 0:
             out["residual"] = balance - out["damping"]
+        else:
+            # Not summed in the loop (``output.energy = "balance"``; the bonds' dashpots always, as their work
+            # would take a second stencil pass every step): the damping is what the other terms leave, and
+            # the residual is not measured.
+            out["damping"], out["residual"] = balance, np.full(count, np.nan)
         return out
 
     def _energy_checkpoint(self) -> dict:

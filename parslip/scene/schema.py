@@ -150,6 +150,10 @@ SCHEMA: dict[str, Key] = {
     "output.fields": Key("all", str, "-", "'all' or 'interface'", _choice("all", "interface"),
                          "what a run writes: the interface record and whole-lattice snapshots, or the "
                          "interface record only (no snapshot is computed, held or written)"),
+    "output.energy": Key("balance", str, "-", "'balance' or 'checked'", _choice("balance", "checked"),
+                         "the energy budget's damping (/energy): 'balance' what the other terms leave (free; the "
+                         "residual reads NaN), 'checked' the body drag summed node by node every step (about a "
+                         "fifth more per step; the residual then measures the budget's closure)"),
     "output.progress_s": Key(10.0, float, "s", "> 0", _range(0.0, lo_open=True),
                              "wall-clock interval between progress lines (at most 30 s without a terminal)"),
     "output.buffer_frames": Key(0, int, "frames", ">= 0 (0 = auto: 8 MiB of frames on the widest slab)",

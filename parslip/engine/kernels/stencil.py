@@ -62,16 +62,16 @@ def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, damped, energy):
+def budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy):
     """A node's exact shares of the budget (``kernels.exact``, in quanta) after its update u(t-dt) = q ->
-    u(t+dt) = n from u(t): the body drag of the step, sd |n - q|^2 (the bonds' dashpots are not summed
-    here: ``kernels.budget``); in a step that ends on a frame, |n - u|^2 / (2 dt^2) and the bulk elastic
+    u(t+dt) = n from u(t): with ``drag`` the body drag of the step, sd |n - q|^2 (``output.energy =
+    "checked"``; the bonds' dashpots are never summed here: ``kernels.budget``); in a step that ends on a frame, |n - u|^2 / (2 dt^2) and the bulk elastic
     -1/2 n . C F(u) / C with C F(u) = (gx, gy), which sum to H(t + dt/2).  ``cs`` holds the factors with
     each term's scale in them (``Budget.cs``)."""
     d = 0
     k = 0
     e = 0
-    if damped:
+    if drag:
         dx, dy = float(nx) - float(qx), float(ny) - float(qy)
         d = quant((dx * dx + dy * dy) * cs[0])
     if energy:
@@ -95,8 +95,8 @@ def _six(zx, zy, r, j0, n, s):
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, rated, energy):
-    """The loop of ``row_full``, for constant (damped, rated, energy): the compiler keeps one branch-free
+def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, drag, rated, energy):
+    """The loop of ``row_full``, for constant (damped, drag, rated, energy): the compiler keeps one branch-free
     loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
     xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr = _six(zx, zy, r, j0, n, s)
     cm, c0, cp, dm, d0, dp, cul, cur, dul, dur, cdl, cdr, ddl, ddr = _six(cx, cy, r, j0, n, s)
@@ -124,38 +124,42 @@ def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, dam
             ny = uy + ((uy - qy) + fy)
         ox[k] = nx
         oy[k] = ny
-        if damped and not energy:       # the common step: the body drag alone, its offset taken once below
+        if drag and not energy:         # a step of "checked": the body drag alone, its offset taken once below
             dx, dy = float(nx) - float(qx), float(ny) - float(qy)
             ds += raw((dx * dx + dy * dy) * cs[0])
-        elif damped or energy:
-            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, damped, energy)
+        elif drag or energy:
+            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy)
             ds += d
             ks += kk
             es += e
-    if damped and not energy:
+    if drag and not energy:
         ds -= n * MAGIC_BITS
     return ds, ks, es
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, rated, energy, cs):
+def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
     forces are those of the field (zx, zy) (u(t) itself, or with the bonds' dashpots ``rate_field``).
-    Returns the segment's exact shares of the budget (damping, kinetic, elastic; ``_budget``)."""
+    Returns the segment's exact shares of the budget (damping, kinetic, elastic; ``budget_shares``)."""
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
     # One call per combination, each with constant flags: a loop without branches for each.
     if damped:
+        if drag:
+            if energy:
+                return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, True, False, True)
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, True, False, False)
         if energy:
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, True)
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False)
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False, True)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False, False)
     if rated:
         if energy:
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, True, True)
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, True, False)
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True, True)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True, False)
     if energy:
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True)
-    return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, True)
+    return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, False)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
@@ -185,7 +189,8 @@ def _views(zx, zy, r, rr, j0, n, s, up):
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, rated, energy, cs):
+def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, drag, rated, energy,
+             cs):
     """Row segment of a block's top row (``up`` False: no up bonds) or bottom row (``up`` True: no down bonds).
 
     Adds C (ex + gx, ey + gy): the per-column external force (ex, ey), e.g.
@@ -211,11 +216,11 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
         ny = uy + (damp * (uy - qy) + (fy + cf * (eys[k] + gy)))
         ox[k] = nx
         oy[k] = ny
-        if damped or energy:
+        if drag or energy:
             hx, hy = fx, fy
             if rated and energy:
                 hx, hy = _edge_force(cx, cy, um, u0, up_, vm, v0, vp, up2, uq2, vp2, vq2, k, kn, kt, a, b, c)
-            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, hx, hy, cs, damped, energy)
+            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, hx, hy, cs, drag, energy)
             ds += d
             ks += kk
             es += e
@@ -245,7 +250,7 @@ def masked_force(zx, zy, r, j, s, K, blk, mask):
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy, rated, energy, cs):
+def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy, drag, rated, energy, cs):
     """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
     Returns its exact shares of the budget (``budget_shares``)."""
     bb = K[blk, K_DAMP]
@@ -257,12 +262,12 @@ def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, f
     ny = uy + (damp * (uy - qy) + (gy + cf * fy))
     px[r, j] = nx
     py[r, j] = ny
-    if not (damped or energy):
+    if not (drag or energy):
         return 0, 0, 0
     hx, hy = gx, gy
     if rated and energy:
         hx, hy = masked_force(cx, cy, r, j, s, K, blk, mask)
-    return budget_shares(ux, uy, qx, qy, nx, ny, hx, hy, cs, damped, energy)
+    return budget_shares(ux, uy, qx, qy, nx, ny, hx, hy, cs, drag, energy)
 
 
 @njit(cache=True, _nrt=False, fastmath={"contract"})
