@@ -358,7 +358,9 @@ class Simulation:
         mine = np.zeros((2, bg.N_TERMS))
         for acc, term in ((b.work, bg.W_DRIVE), (b.broken, bg.BROKEN), (b.formed, bg.FORMED)):
             bg.total(acc, mine, term)
-        mine += b.base
+        for k in range(bg.N_TERMS):                 # what an earlier restart carried over, without a rounding
+            bg.add(mine, k, b.base[0, k])
+            bg.add(mine, k, b.base[1, k])
         damp = int(b.acc[bg.Q_DAMP, 0]) * (1 << bg.WORD) + int(b.acc[bg.Q_DAMP, 1])
         parts = self._to_root((mine, damp))
         attrs = None
