@@ -183,7 +183,7 @@ def test_a_bond_out_of_reach_is_caught_not_skipped():
     bx, by, tx, ty = s.level(0)
     br = g.brow
     s.iface.reach[0] = -1
-    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], bx[br], s.iface)
+    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], ty[1], bx[br], by[br], s.iface, *np.zeros((2, 2, tx.shape[1])))
     assert s.iface.reach[0] == j + g.tbase
 
 

@@ -17,7 +17,7 @@ def _update(sim):
     bx, by, tx, ty = s.level(0)
     g = s.iface.geom
     br = g.brow
-    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], bx[br], s.iface)
+    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], ty[1], bx[br], by[br], s.iface, *np.zeros((2, 2, tx.shape[1])))
     return s.iface.bonds[PARTNER].astype(np.int64)
 
 
