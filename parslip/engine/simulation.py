@@ -361,17 +361,20 @@ class Simulation:
         for k in range(bg.N_TERMS):                 # what an earlier restart carried over, without a rounding
             bg.add(mine, k, b.base[0, k])
             bg.add(mine, k, b.base[1, k])
-        damp = int(b.acc[bg.Q_DAMP, 0]) * (1 << bg.WORD) + int(b.acc[bg.Q_DAMP, 1])
-        parts = self._to_root((mine, damp))
+        # The kernels' exact sums: the damping's running total, and the kinetic and elastic energy of the
+        # last step that ended on a frame (a frame not yet recorded when the run stopped reads them after).
+        quanta = [int(b.acc[q, 0]) * (1 << bg.WORD) + int(b.acc[q, 1]) for q in range(bg.N_Q)]
+        parts = self._to_root((mine, quanta))
         attrs = None
         if self.rank == 0:
             stack = np.stack([p[0] for p in parts])                # [rank, 2, term]
             hi = np.array([math.fsum(stack[:, :, t].ravel()) for t in range(bg.N_TERMS)])
             lo = np.array([math.fsum(list(stack[:, :, t].ravel()) + [-hi[t]]) for t in range(bg.N_TERMS)])
-            total = sum(p[1] for p in parts)                       # exact: the damping's quanta
+            totals = [sum(p[1][q] for p in parts) for q in range(bg.N_Q)]      # exact, in quanta
             base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
             attrs = {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
-                     "energy_damping_quanta": np.array([total >> bg.WORD, total & ((1 << bg.WORD) - 1)], np.int64)}
+                     "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in totals],
+                                               np.int64)}
         return attrs if self.comm is None else self.comm.bcast(attrs, root=0)
 
     def _energy_restore(self, attrs: dict):
@@ -383,7 +386,7 @@ class Simulation:
         if self.rank == 0:
             b.base[:] = np.nan if tot is None else np.asarray(tot, np.float64)
             if tot is not None:
-                b.acc[bg.Q_DAMP] = np.asarray(attrs["energy_damping_quanta"], np.int64)
+                b.acc[:] = np.asarray(attrs["energy_quanta"], np.int64)
             base = attrs.get("energy_base")
             self.energy_base = None if base is None or not np.all(np.isfinite(base)) else np.asarray(base)
         u_prev = s.owned_u(self.n - 1)
