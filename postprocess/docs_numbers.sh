@@ -9,6 +9,11 @@
 #   bash postprocess/docs_numbers.sh paper      # docs/studies/img/ figures of the paper page (~6 min)
 #   bash postprocess/docs_numbers.sh scaling    # docs/hpc/shear_l500_*.png and the l = 500 run's numbers (~4 min, 2 ranks)
 #   bash postprocess/docs_numbers.sh interfaces # docs/studies/interfaces_*.csv and img/interfaces_* (~4 min, 2 ranks)
+#   bash postprocess/docs_numbers.sh cracks_energy      # docs/studies/cracks_energy.csv and img/cracks_energy_*
+#   bash postprocess/docs_numbers.sh cracks_precursors  # docs/studies/cracks_precursors.csv and img/cracks_precursors_*
+#   bash postprocess/docs_numbers.sh cracks_supershear  # docs/studies/cracks_supershear.csv and img/cracks_supershear_*
+#   bash postprocess/docs_numbers.sh cracks_healing     # docs/studies/cracks_healing.csv and img/cracks_healing_*
+#     (docs/studies/cracks.md: each runs its sweeps run/studies/cracks_<study>*.toml, then postprocess/cracks.py)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
@@ -16,7 +21,7 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
@@ -61,6 +66,12 @@ interfaces)
         "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "run/studies/interface_$s.toml" -o "$OUT/interfaces/interface_$s"
     done
     "$PY" postprocess/interface_studies.py --dir "$OUT/interfaces" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
+cracks_energy|cracks_precursors|cracks_supershear|cracks_healing)
+    study=${what#cracks_}
+    for f in run/studies/cracks_"$study"*.toml; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/cracks/$(basename "$f" .toml)"
+    done
+    "$PY" postprocess/cracks.py "$study" --dir "$OUT/cracks" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing" >&2; exit 2 ;;
 esac
