@@ -1,0 +1,144 @@
+"""Healing with contact (docs/studies/cracks.md, section 4): the heal_time and heal_speed studies of
+docs/studies/interfaces.md re-run with and without ``interface.contact``, to tell which of their findings
+were the sinking of unbonded sites.
+
+In the paper's interface a top site whose bond has broken feels no force from the substrate, so under F_N a
+block whose bonds wait to re-form sinks (at about F_N/(N zeta) under absolute damping, N the block's nodes)
+and can leave the delta0 window within which a bond re-forms.  Each sweep here runs its points at contact 0
+(the paper, as the old study ran) and with the contact on; per run the table holds what the old tables
+held (the first crossing front's kind, speed and width, the bonds re-formed before it crossed, fronts,
+crossings, mu_s) and what tells the sinking apart: every re-formation of the drive, the slip events, the
+share of bonds intact at the end, and the deepest any block site went below its start
+(``analysis.friction.sinking``).
+
+Sweeps (``run/studies/cracks_healing*.toml``): ``_time`` and ``_speed`` are the old sweeps on the old scene
+(l = 100 a), ``_stiff`` a stiffer contact on the rows that change, ``_l500`` T0 rows on the resolved
+identical-solid scene (run/cracks_l500.toml).
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from parslip.analysis.friction import sinking
+from parslip.io.contract import EVENT_FORM
+from parslip.plot.figures import pyplot, save
+
+from . import points, sweeps, write
+
+# The columns of cracks_healing.csv (then scene and commit).
+COLS = ["sweep", "point", "l", "rows", "drive.mode", "drive.v0", "swept", "value", "contact", "kind", "mean v",
+        "width a", "re-formed before crossing", "re-formations", "n_fronts", "n_crossed", "slip events", "mu_s",
+        "intact at end", "max sink a"]
+# What each sweep file varies besides the contact (the sweep's stem after cracks_healing_).
+SWEPT = {"time": "interface.heal_time", "speed": "interface.heal_speed", "stiff": "interface.heal_time",
+         "l500": "interface.heal_time"}
+
+
+def first_crossing(run, fr):
+    """The first front whose own tip crossed the contact (fate "crossed"), else the first front, else None:
+    the front the old tables described."""
+    for f, w in zip(fr, run.fates()):
+        if w == "crossed":
+            return f
+    return fr[0] if fr else None
+
+
+def reformations(run, t0: float = 0.0, t1: float = math.inf) -> int:
+    """Bonds re-formed with t0 < t < t1 (l/c_r), from the event record; -1 without one."""
+    ev = run.events
+    if ev is None:
+        return -1
+    t = np.asarray(ev["time"])
+    return int(np.sum((np.asarray(ev["kind"]) == EVENT_FORM) & (t > t0) & (t < t1)))
+
+
+def row_of(stem: str, row: dict, run) -> dict:
+    """One table row: the point's keys and the measures of its run (NaN and "-" for a failed point)."""
+    key = SWEPT[stem.removeprefix("cracks_healing_")]
+    sc = run.scene if run is not None else {}
+    r = {"sweep": stem, "point": row["point"], "swept": key, "value": row.get(key, sc.get(key)),
+         "contact": row.get("interface.contact", sc.get("interface.contact", 0.0)),
+         "l": sc.get("lattice.top_cols", math.nan), "rows": sc.get("lattice.top_rows", math.nan),
+         "drive.mode": sc.get("drive.mode", "-"), "drive.v0": sc.get("drive.v0", math.nan),
+         "scene": row.get("scene", ""), "commit": row.get("commit", "")}
+    if run is None:
+        return {**r, **{c: math.nan for c in COLS if c not in r}, "kind": "failed"}
+    fr = run.fronts()
+    f = first_crossing(run, fr)
+    intact = np.asarray(run.interface["intact"])
+    return {**r, "kind": f.kind if f else "-", "mean v": abs(f.mean_speed) if f else math.nan,
+            "width a": f.width if f else math.nan,
+            "re-formed before crossing": reformations(run, f.nucleation_time, f.t_end) if f else -1,
+            "re-formations": reformations(run), "n_fronts": len(fr), "n_crossed": row.get("n_crossed", math.nan),
+            "slip events": len(run.slip_events()), "mu_s": row.get("mu_s", math.nan),
+            "intact at end": float(intact[-1].mean()) if intact.size else math.nan,
+            "max sink a": float(max(0.0, np.max(sinking(run), initial=0.0)))}
+
+
+def sink_figure(curves: list, img: str, source) -> list[str]:
+    """The deepest block site below its start against time, per run drawn (label, t, depth), with the
+    height at which a sunk site leaves the re-bonding window."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for label, t, d, style in curves:
+        ax.plot(t, d, style, lw=1.1, label=label)
+    ax.axhline(1.0, color="0.4", ls=":", lw=0.8)
+    ax.text(0.01, 1.05, "~1 a: a sunk site is out of the delta0 window", fontsize=7, transform=ax.get_yaxis_transform())
+    ax.set_xlabel("t (l/c_r)")
+    ax.set_ylabel("deepest block site below its start (a)")
+    ax.set_yscale("symlog", linthresh=0.1)
+    ax.legend(fontsize=6, ncol=2)
+    ax.set_title("T0 with a healing delay: unbonded sites sink without contact", fontsize=8)
+    return save(fig, img, "cracks_healing_sink", source)
+
+
+def fronts_figure(rows: list[dict], img: str, source) -> list[str]:
+    """Fronts and re-formations against heal_time at l = 100, contact 0 (open) and on (filled)."""
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(8, 3.6))
+    sel = [r for r in rows if r["sweep"] == "cracks_healing_time"]
+    for mode, colour in (("push", "tab:blue"), ("shear", "tab:red")):
+        for on in (False, True):
+            pts = sorted((r["value"], r["n_fronts"], r["re-formations"]) for r in sel
+                         if r["drive.mode"] == mode and (r["contact"] > 0) == on)
+            if not pts:
+                continue
+            x, nf, nr = zip(*pts)
+            style = dict(color=colour, marker="o", mfc=colour if on else "none", ls="-" if on else "--",
+                         label=f"{mode}, contact {'on' if on else '0'}")
+            axes[0].plot(x, nf, **style)
+            axes[1].plot(x, np.maximum(nr, 0.5), **style)
+    axes[0].set_ylabel("fronts in 100 l/c_r")
+    axes[1].set_ylabel("bonds re-formed in 100 l/c_r")
+    axes[1].set_yscale("log")
+    for ax in axes:
+        ax.set_xlabel("interface.heal_time (l/c_r)")
+        ax.legend(fontsize=6)
+    fig.suptitle("heal_time at l = 100 a: with and without contact", fontsize=8)
+    return save(fig, img, "cracks_healing_fronts", source)
+
+
+def tabulate(runs: str, img: str, tables: str) -> str:
+    """Write cracks_healing.csv and the figures; return the Markdown table."""
+    rows, curves = [], []
+    for d in sweeps(runs, "healing"):
+        stem = os.path.basename(d)
+        for row, run in points(d):
+            rows.append(row_of(stem, row, run))
+            r = rows[-1]
+            if run is not None and r["drive.mode"] == "shear" and r["value"] in (2.0, 5.0) and stem != "cracks_healing_stiff":
+                style = ("-" if r["contact"] > 0 else "--") + ("" if r["l"] == 100 else ".")
+                curves.append((f"l = {r['l']:g}, heal {r['value']:g}, contact {r['contact']:g}", run.times,
+                               sinking(run), style))
+    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    md = write(rows, COLS, os.path.join(tables, "cracks_healing.csv"))
+    if curves:
+        sink_figure(curves, img, source)
+    fronts_figure(rows, img, source)
+    for f in os.listdir(img):
+        if f.startswith("cracks_healing_") and f.endswith(".pdf"):
+            os.remove(os.path.join(img, f))
+    return md
