@@ -35,6 +35,9 @@ COLS = ["sweep", "point", "l", "rows", "drive.mode", "drive.v0", "swept", "value
 # What each sweep file varies besides the contact (the sweep's stem after cracks_healing_).
 SWEPT = {"time": "interface.heal_time", "speed": "interface.heal_speed", "stiff": "interface.heal_time",
          "l500": "interface.heal_time"}
+# The sinking drawn: the T0 rows with a delay past the old threshold, at both scenes.
+SINK_DRAWN = (2.0, 5.0)
+SINK_SWEEPS = ("cracks_healing_time", "cracks_healing_l500")
 
 
 def first_crossing(run, fr):
@@ -79,45 +82,47 @@ def row_of(stem: str, row: dict, run) -> dict:
 
 
 def sink_figure(curves: list, img: str, source) -> list[str]:
-    """The deepest block site below its start against time, per run drawn (label, t, depth), with the
-    height at which a sunk site leaves the re-bonding window."""
+    """The deepest block site below its start against time, per run drawn (label, t, depth, colour, dashed),
+    with the depth at which a sunk site has left the re-bonding window."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for label, t, d, style in curves:
-        ax.plot(t, d, style, lw=1.1, label=label)
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for label, t, d, colour, dashed in curves:
+        ax.plot(t, d, color=colour, ls="--" if dashed else "-", lw=1.1, label=label)
     ax.axhline(1.0, color="0.4", ls=":", lw=0.8)
-    ax.text(0.01, 1.05, "~1 a: a sunk site is out of the delta0 window", fontsize=7, transform=ax.get_yaxis_transform())
+    ax.text(0.01, 1.1, "1 a: a sunk site has left the delta0 window", fontsize=7, transform=ax.get_yaxis_transform())
     ax.set_xlabel("t (l/c_r)")
     ax.set_ylabel("deepest block site below its start (a)")
     ax.set_yscale("symlog", linthresh=0.1)
     ax.legend(fontsize=6, ncol=2)
-    ax.set_title("T0 with a healing delay: unbonded sites sink without contact", fontsize=8)
+    ax.set_title("T0 with a healing delay: contact 0 dashed, contact on solid", fontsize=8)
     return save(fig, img, "cracks_healing_sink", source)
 
 
 def fronts_figure(rows: list[dict], img: str, source) -> list[str]:
-    """Fronts and re-formations against heal_time at l = 100, contact 0 (open) and on (filled)."""
+    """Fronts and re-formations against heal_time, per scene and drive, contact 0 (open, dashed) and on
+    (filled); the stiffness rows are left to the table."""
     plt = pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(8, 3.6))
-    sel = [r for r in rows if r["sweep"] == "cracks_healing_time"]
-    for mode, colour in (("push", "tab:blue"), ("shear", "tab:red")):
+    fig, axes = plt.subplots(1, 2, figsize=(8.5, 3.8))
+    sel = [r for r in rows if r["sweep"] in ("cracks_healing_time", "cracks_healing_l500") and r["kind"] != "failed"]
+    groups = sorted({(r["l"], r["drive.mode"]) for r in sel})
+    for i, (l, mode) in enumerate(groups):
         for on in (False, True):
             pts = sorted((r["value"], r["n_fronts"], r["re-formations"]) for r in sel
-                         if r["drive.mode"] == mode and (r["contact"] > 0) == on)
+                         if (r["l"], r["drive.mode"]) == (l, mode) and (r["contact"] > 0) == on)
             if not pts:
                 continue
             x, nf, nr = zip(*pts)
-            style = dict(color=colour, marker="o", mfc=colour if on else "none", ls="-" if on else "--",
-                         label=f"{mode}, contact {'on' if on else '0'}")
+            style = dict(color=f"C{i}", marker="o", mfc=f"C{i}" if on else "none", ls="-" if on else "--",
+                         label=f"l = {l:g} a, {mode}, contact {'on' if on else '0'}")
             axes[0].plot(x, nf, **style)
             axes[1].plot(x, np.maximum(nr, 0.5), **style)
-    axes[0].set_ylabel("fronts in 100 l/c_r")
-    axes[1].set_ylabel("bonds re-formed in 100 l/c_r")
+    axes[0].set_ylabel("fronts in the run")
+    axes[1].set_ylabel("bonds re-formed in the run (0 drawn at 0.5)")
     axes[1].set_yscale("log")
     for ax in axes:
         ax.set_xlabel("interface.heal_time (l/c_r)")
         ax.legend(fontsize=6)
-    fig.suptitle("heal_time at l = 100 a: with and without contact", fontsize=8)
+    fig.suptitle("heal_time with and without contact (l = 100: 100 l/c_r; l = 500: 30 l/c_r)", fontsize=8)
     return save(fig, img, "cracks_healing_fronts", source)
 
 
@@ -129,10 +134,10 @@ def tabulate(runs: str, img: str, tables: str) -> str:
         for row, run in points(d):
             rows.append(row_of(stem, row, run))
             r = rows[-1]
-            if run is not None and r["drive.mode"] == "shear" and r["value"] in (2.0, 5.0) and stem != "cracks_healing_stiff":
-                style = ("-" if r["contact"] > 0 else "--") + ("" if r["l"] == 100 else ".")
-                curves.append((f"l = {r['l']:g}, heal {r['value']:g}, contact {r['contact']:g}", run.times,
-                               sinking(run), style))
+            if run is not None and r["drive.mode"] == "shear" and r["value"] in SINK_DRAWN and stem in SINK_SWEEPS:
+                colour = f"C{SINK_DRAWN.index(r['value']) + 2 * SINK_SWEEPS.index(stem)}"
+                curves.append((f"l = {r['l']:g} a, heal_time {r['value']:g}, contact {r['contact']:g}", run.times,
+                               sinking(run), colour, r["contact"] == 0))
     source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
     md = write(rows, COLS, os.path.join(tables, "cracks_healing.csv"))
     if curves:
