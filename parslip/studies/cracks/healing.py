@@ -31,7 +31,7 @@ from . import points, sweeps, write
 # The columns of cracks_healing.csv (then scene and commit).
 COLS = ["sweep", "point", "l", "rows", "drive.mode", "drive.v0", "swept", "value", "contact", "kind", "mean v",
         "width a", "re-formed before crossing", "re-formations", "n_fronts", "n_crossed", "slip events", "mu_s",
-        "intact at end", "max sink a"]
+        "intact at end", "max sink a", "window l/c_r"]
 # What each sweep file varies besides the contact (the sweep's stem after cracks_healing_).
 SWEPT = {"time": "interface.heal_time", "speed": "interface.heal_speed", "stiff": "interface.heal_time",
          "l500": "interface.heal_time"}
@@ -58,6 +58,20 @@ def reformations(run, t0: float = 0.0, t1: float = math.inf) -> int:
     return int(np.sum((np.asarray(ev["kind"]) == EVENT_FORM) & (t > t0) & (t < t1)))
 
 
+def rebond_window(scene: dict) -> float:
+    """How long (l/c_r) a top site sliding at the drive's speed stays within delta0 of one substrate site
+    while the contact holds it up, the longest a claim can last: the site rests p = F_N/(N_s k_c) below
+    delta0 (its share of the load over the contact's stiffness, N_s = top_cols sites), so its path cuts the
+    delta0 disc around a substrate site in a chord 2 sqrt(2 delta0 p - p^2) (a), crossed at v0 l a per l/c_r
+    (v0 in c_r, l = top_cols a).  A delay longer than this cannot be served while the block slides.  NaN for
+    contact 0 (nothing holds the site up) or no drive."""
+    kc, v0, n = scene.get("interface.contact", 0.0), scene.get("drive.v0", 0.0), scene.get("lattice.top_cols", 0)
+    if not (kc > 0 and v0 > 0 and n > 0):
+        return math.nan
+    p, d0 = min(scene["load.FN"] / (n * kc), scene["interface.delta0"]), scene["interface.delta0"]
+    return 2 * math.sqrt(2 * d0 * p - p * p) / (v0 * n)
+
+
 def row_of(stem: str, row: dict, run) -> dict:
     """One table row: the point's keys and the measures of its run (NaN and "-" for a failed point)."""
     key = SWEPT[stem.removeprefix("cracks_healing_")]
@@ -66,7 +80,7 @@ def row_of(stem: str, row: dict, run) -> dict:
          "contact": row.get("interface.contact", sc.get("interface.contact", 0.0)),
          "l": sc.get("lattice.top_cols", math.nan), "rows": sc.get("lattice.top_rows", math.nan),
          "drive.mode": sc.get("drive.mode", "-"), "drive.v0": sc.get("drive.v0", math.nan),
-         "scene": row.get("scene", ""), "commit": row.get("commit", "")}
+         "window l/c_r": rebond_window(sc), "scene": row.get("scene", ""), "commit": row.get("commit", "")}
     if run is None:
         return {**r, **{c: math.nan for c in COLS if c not in r}, "kind": "failed"}
     fr = run.fronts()
@@ -93,6 +107,7 @@ def sink_figure(curves: list, img: str, source) -> list[str]:
     ax.set_xlabel("t (l/c_r)")
     ax.set_ylabel("deepest block site below its start (a)")
     ax.set_yscale("symlog", linthresh=0.1)
+    ax.set_ylim(bottom=-0.05)                      # a site may stand a little above its start: no more
     ax.legend(fontsize=6, ncol=2)
     ax.set_title("T0 with a healing delay: contact 0 dashed, contact on solid", fontsize=8)
     return save(fig, img, "cracks_healing_sink", source)
