@@ -99,16 +99,17 @@ def sink_figure(curves: list, img: str, source) -> list[str]:
     """The deepest block site below its start against time, per run drawn (label, t, depth, colour, dashed),
     with the depth at which a sunk site has left the re-bonding window."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    fig, ax = plt.subplots(figsize=(6.5, 5.2))
     for label, t, d, colour, dashed in curves:
         ax.plot(t, d, color=colour, ls="--" if dashed else "-", lw=1.1, label=label)
     ax.axhline(1.0, color="0.4", ls=":", lw=0.8)
-    ax.text(0.01, 1.1, "1 a: a sunk site has left the delta0 window", fontsize=7, transform=ax.get_yaxis_transform())
+    ax.text(0.01, 1.1, "about 1 a: a sunk site has left the delta0 window", fontsize=7,
+            transform=ax.get_yaxis_transform())
     ax.set_xlabel("t (l/c_r)")
     ax.set_ylabel("deepest block site below its start (a)")
     ax.set_yscale("symlog", linthresh=0.1)
     ax.set_ylim(bottom=-0.05)                      # a site may stand a little above its start: no more
-    ax.legend(fontsize=6, ncol=2)
+    ax.legend(fontsize=6, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     ax.set_title("T0 with a healing delay: contact 0 dashed, contact on solid", fontsize=8)
     return save(fig, img, "cracks_healing_sink", source)
 
