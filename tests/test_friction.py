@@ -280,3 +280,17 @@ def test_fronts_command_lists_the_slip_events(small_run, capsys):
     assert main(["fronts", small_run]) == 0
     assert "slip event" in capsys.readouterr().out
     assert main(["figures", small_run, "-o", str(pathlib.Path(small_run).parent / "ss"), "--only", "stick_slip"]) == 0
+
+
+def test_sinking_is_the_deepest_site_below_its_start_in_lattice_spacings():
+    """A drawn record of 4 sites on l = 40 a: one site sinks at 0.5 a per frame, one rises; the depth per
+    frame is the sinking site's, in a, and a record where every site rises stays negative."""
+    t = np.arange(5.0)
+    uy = np.zeros((5, 4)) + 0.01                             # a common offset: heights count from the start
+    uy[:, 1] -= 0.5 * t / 40                                # 0.5 a per frame, in l
+    uy[:, 3] += 2.0 * t / 40
+    run = Run.from_arrays({"time": t, "uy": uy, "x": np.arange(4) / 4}, scene={"lattice.top_cols": 40})
+    assert np.allclose(FR.sinking(run), 0.5 * t, rtol=0, atol=1e-12)
+    up = Run.from_arrays({"time": t, "uy": 0.01 + np.outer(t, [1, 2, 3, 4]) / 40, "x": np.arange(4) / 4},
+                         scene={"lattice.top_cols": 40})
+    assert np.allclose(FR.sinking(up)[1:], -t[1:], rtol=0, atol=1e-12)

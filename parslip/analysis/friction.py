@@ -12,6 +12,7 @@ Every measure is a function of the run (``analysis.results.Run``); the catalogue
   precursors(run)                the fronts that arrested inside the contact (``Precursor``)
   slip_events(run, min_drop)     the stick-slip record's drops of mu (``SlipEvent``)
   observables(run)               the one-row digest a sweep's summary table holds per point
+  sinking(run)                   per frame, the depth of the block's lowest-gone interface site below its start, a
   summary(run), summary_lines(run), slip_event_lines(events)   the same as text
 
 Definitions (x and lengths in l, t in l/c_r, speeds in c_r):
@@ -441,3 +442,17 @@ def slip_event_lines(events: list[SlipEvent], min_drop: float = MIN_DROP) -> lis
         lines.append(f"  {e.index + 1:>3} {e.t_start:>8.3f} {e.t_end:>8.3f} {e.mu_before:>9.4g} {e.mu_after:>9.4g} "
                      f"{e.drop:>7.3g} {e.loader:>8.4g} {len(e.fronts):>6} {pre:>10}")
     return lines
+
+
+def sinking(run) -> np.ndarray:
+    """Per interface frame, how far the block's interface site that has gone deepest is below its height at
+    the drive's start, in a: max over sites of -(u_y(t) - u_y(0)) * l/a, with l = lattice.top_cols a (the
+    sites' count when the scene does not say).  Negative when every site stands above its start.  A site
+    with no bond and no contact (``interface.contact`` = 0) feels nothing from the substrate, so under F_N
+    it sinks (at about F_N/(N zeta) on the block of N nodes under absolute damping); its largest value
+    over the record is the test that the contact holds the block up."""
+    uy = np.asarray(run.interface["uy"], float)
+    if uy.ndim != 2 or not uy.size:
+        return np.zeros(0)
+    l_a = float(run.scene.get("lattice.top_cols") or uy.shape[1])
+    return -(uy - uy[0]).min(axis=1) * l_a
