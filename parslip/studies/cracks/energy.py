@@ -120,25 +120,31 @@ def energy_figure(rows: list[dict], img: str, source) -> list[str]:
     return save(fig, img, "cracks_energy_g_v", source)
 
 
+# The marker of each block height (in Lambda, rounded): the route-2 figure tells the heights apart by it.
+HEIGHT_MARKERS = ((7.0, "v"), (15.0, "D"), (30.0, "o"), (math.inf, "s"))
+
+
 def gap_figure(rows: list[dict], img: str, source) -> list[str]:
-    """Route 2 over route 1 against the blocks' height in Lambda, on the fronts whose contours agree (first
-    fronts large, later ones small): where the singular field route 2 fits has room (``cracks.FIELD_HEIGHT``),
-    and the band of the target."""
+    """Route 2 over route 1 (the inner contour) against v/c_R for each run's first front, the marker by the
+    blocks' height in Lambda, filled where route 1's contours agree (``route1_ok``), open where they do not:
+    whether route 2's shortfall follows the height (``cracks.FIELD_HEIGHT``), the speed or the damping."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    for name, c in _colours(rows).items():
-        for first, m, ms in ((True, "o", 7), (False, ".", 4)):
-            sel = [r for r in rows if _label(r) == name and r["first"] == first and r["route1_ok"]
-                   and math.isfinite(r["G_routes_ratio"]) and r["G_routes_ratio"] > 0]
-            ax.plot([r["height_lambda"] * (1 + 0.03 * (r["v_over_cR"] - 0.5)) for r in sel],
-                    [1.0 / r["G_routes_ratio"] for r in sel], m, color=c, ms=ms, label=name if first else None)
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    colours = _colours(rows)
+    for r in rows:
+        if not (r["first"] and math.isfinite(r["G_routes_ratio"]) and r["G_routes_ratio"] > 0):
+            continue
+        m = next(mk for h, mk in HEIGHT_MARKERS if r["height_lambda"] < h)
+        c = colours[_label(r)]
+        ax.plot(r["v_over_cR"], 1.0 / r["G_routes_ratio"], m, color=c, mfc=c if r["route1_ok"] else "none", ms=8,
+                label=_label(r))
     ax.axhspan(1 - AGREE, 1 + AGREE, color="0.9")
     ax.axhline(1.0, color="0.3", lw=0.8, ls="--")
-    ax.axvline(gmeasures.FIELD_HEIGHT, color="0.4", lw=0.8, ls=":")
-    ax.set_xscale("log")
-    ax.set_xlabel("block height / Lambda (Palmer-Rice process zone; points spread by speed)")
-    ax.set_ylabel("route 2 / route 1")
-    ax.legend(fontsize=6)
+    ax.set_xlim(0, 1.05)
+    ax.set_xlabel("front speed / c_R")
+    ax.set_ylabel("route 2 / route 1 (inner contour)")
+    ax.legend(fontsize=6, title="first fronts (marker: block height;\nopen: contours differ by > "
+              f"{CONTOURS:.0%})", title_fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
     ax.set_title(f"the field fit against the contour flux (band: within {AGREE:.0%})", fontsize=8)
     return save(fig, img, "cracks_energy_routes", source)
 
