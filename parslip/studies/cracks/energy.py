@@ -23,7 +23,7 @@ from parslip.plot.figures import pyplot, save
 from parslip.studies.cracks import points, sweeps, write
 
 COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "top_rows",
-        "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner", "G_contour_outer", "G_field",
+        "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner", "G_contour_outer", "G_field",
         "Gamma", "take_inner", "take_outer", "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio",
         "contours_ratio", "route1_ok", "field_resolved", "snapshots", "frames"]
 # What the page's table shows (the CSV holds every column).
@@ -56,6 +56,7 @@ def front_row(sweep: str, row: dict, run, k: int, front) -> dict:
     return {"sweep": sweep, "point": row["point"], "run": os.path.basename(run.path), "front": k, "first": k == 0,
             "t_nuc": front.nucleation_time, "x_nuc": front.nucleation_x, "damping": s["time.damping"],
             "zeta": s["time.zeta"], "kx": s["interface.kx"], "FN": s["load.FN"], "top_rows": s["lattice.top_rows"],
+            "bottom_kn": s["material.bottom_kn"], "bottom_kt": s["material.bottom_kt"],
             "height_lambda": height_lambda(run), "Lambda": e["Lambda"], "v": e["v"], "v_over_cR": e["v"] / c_R,
             "band": front.band or "-", "G_contour_inner": e["G_contour_inner"],
             "G_contour_outer": e["G_contour_outer"], "G_field": e["G_field"], "Gamma": e["Gamma"],
