@@ -23,8 +23,8 @@ from parslip.plot.figures import pyplot, save
 from parslip.studies.cracks import points, sweeps, write
 
 COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "top_rows",
-        "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner", "G_contour_outer", "G_field",
-        "Gamma", "take_inner", "take_outer", "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio",
+        "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner",
+        "G_contour_outer", "G_field", "Gamma", "take_inner", "take_outer", "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio",
         "contours_ratio", "route1_ok", "field_resolved", "snapshots", "frames"]
 # What the page's table shows (the CSV holds every column).
 SHOWN = ["sweep", "point", "front", "damping", "zeta", "kx", "height_lambda", "v_over_cR", "Gamma", "G_over_Gamma",
