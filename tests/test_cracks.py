@@ -329,6 +329,30 @@ def test_mode2_fit_shifted_refuses_a_rising_profile():
     assert all(math.isnan(v) for v in cracks.mode2_fit_shifted(xi, 0.1 + xi))
 
 
+def test_the_bonds_dashpots_are_what_they_deliver_to_the_nodes_inside():
+    """``time.damping = "bonds"``: route 1 with a dashpot beta K (v_j - v_i) on every bond differs from the
+    undamped one by the dashpots' power on the box's nodes over V, summed node by node (each node's net
+    dashpot force dotted with its velocity), which shares nothing with the contour's bond sums; their
+    dissipation is beta dv.K dv over the bonds the box holds, half of each it cuts, and positive."""
+    kn, kt = BORN
+    ref, bonds, p, p_prev, dt = laid_crack(kn, kt, 0.5)
+    beta = 0.1 / kn
+    box, V = (0.0, 0.0, 12.0), 0.5
+    plain = cracks.contour_flux(ref, p, p_prev, dt, bonds, box, V)
+    damped = cracks.contour_flux(ref, p, p_prev, dt, {**bonds, "beta": np.full(len(bonds["i"]), beta)}, box, V)
+    vel = (p - p_prev) / dt
+    i, j = bonds["i"], bonds["j"]
+    f = beta * np.einsum("bij,bj->bi", bonds["K"], vel[j] - vel[i])
+    on_node = np.zeros_like(vel)
+    np.add.at(on_node, i, f)
+    np.add.at(on_node, j, -f)
+    inside = (np.abs(ref[:, 0]) <= 12) & (np.abs(ref[:, 1]) <= 12)
+    power = float(np.sum(on_node[inside] * vel[inside]))
+    assert damped["G"] - plain["G"] == pytest.approx(power / V, rel=1e-9)
+    assert damped["damping"] > 0 and damped["dEdt"] == plain["dEdt"]
+
+
+
 # --- the lattice in static equilibrium: route 2's constant and where its fit holds ------------------------
 def interface_lattice(cols: tuple, rows: int, kn: float, kt: float, spring: tuple | None = None):
     """A triangular lattice of columns cols[0] <= c < cols[1] and rows -rows <= r < rows, the crack plane y = 0

@@ -38,6 +38,10 @@ holds, half of those it cuts).  Then
 
     G V = F - dE_R/dt - P_damp,        P_damp = zeta m sum_(i in R) v_i^2   ("absolute" damping, m u'' = f - zeta m u')
 
+or, with ``time.damping = "bonds"`` (a dashpot beta K (v_j - v_i) on each bulk bond, beta = zeta / k_n of its
+block), F taken with each cut bond's whole force and P_damp = sum of beta dv.K dv over the bonds R holds (half
+of a cut one),
+
 is the energy per unit time the breaks inside R take: G in m c_r^2 / a, an energy per unit length of
 advance.  Only data on the contour enters F and dE/dX: no derivative of a continuum field near the tip.  The
 continuum J = integral of [(W + T) n_x - sigma_ij n_j du_i/dx] ds is the same flux; the lattice sum is used
@@ -176,14 +180,22 @@ def contour_flux(ref, p, p_prev, dt: float, bonds: dict, box: tuple, V: float, z
 
     ref (N, 2): reference positions (a), which decide what lies inside the box; p, p_prev (N, 2): positions at
     steps n and n - 1; dt: the step (internal time); bonds: {"i", "j" (nb,), "K" (nb, 2, 2), "d0" (nb, 2)},
-    the force on i being K (p_j - p_i - d0); box = (x_c, y_c, r): the square |x - x_c| <= r, |y - y_c| <= r;
-    V: the tip's signed speed along x (internal units); zeta: absolute damping rate.  Returns {"G" (energy
-    per unit length, internal), "flux", "dEdt", "damping" (powers, internal), "cut" (bonds cut)}."""
+    the force on i being K (p_j - p_i - d0), and optionally "beta" (nb,), each bond's dashpot time (a/c;
+    ``time.damping = "bonds"``: beta K (v_j - v_i) on i too, 0 for an undamped bond); box = (x_c, y_c, r):
+    the square |x - x_c| <= r, |y - y_c| <= r; V: the tip's signed speed along x (internal units); zeta:
+    absolute damping rate.  With dashpots, F carries their force on the cut bonds and P_damp their power
+    beta (v_j - v_i).K(v_j - v_i), whole for a bond inside and half for one cut: together they are the power
+    the dashpots deliver to R's nodes.  Returns {"G" (energy per unit length, internal), "flux", "dEdt",
+    "damping" (powers, internal), "cut" (bonds cut)}."""
     i, j, K, d0 = bonds["i"], bonds["j"], bonds["K"], bonds["d0"]
     vel = (p - p_prev) / dt
     d1 = p[j] - p[i] - d0
     d2 = p_prev[j] - p_prev[i] - d0
     f = 0.5 * np.einsum("bij,bj->bi", K, d1 + d2)                           # on i, at step n - 1/2
+    beta = bonds.get("beta")
+    if beta is not None:                           # the bonds' dashpots: beta K (v_j - v_i) on i, v at n - 1/2
+        f_dash = np.asarray(beta, float)[:, None] * np.einsum("bij,bj->bi", K, vel[j] - vel[i])
+        f = f + f_dash
     e_bond = 0.25 * (np.einsum("bi,bij,bj->b", d1, K, d1) + np.einsum("bi,bij,bj->b", d2, K, d2))
     e_node = 0.5 * mass * np.sum(vel ** 2, axis=1)
     x_c, y_c, r = box
@@ -200,6 +212,9 @@ def contour_flux(ref, p, p_prev, dt: float, bonds: dict, box: tuple, V: float, z
     flux = float(0.5 * np.sum(side * np.einsum("bi,bi->b", f, vel[i] + vel[j])))
     dEdt = -V * (energy(1.0) - energy(-1.0)) / 2.0
     damping = float(zeta * mass * np.sum(vel[m] ** 2))
+    if beta is not None:                           # each dashpot's power, half of it for a bond the contour cuts
+        held = 0.5 * (m[i].astype(float) + m[j])
+        damping += float(np.dot(held, np.einsum("bi,bi->b", f_dash, vel[j] - vel[i])))
     return {"G": (flux - dEdt - damping) / abs(V), "flux": flux, "dEdt": dEdt, "damping": damping,
             "cut": int(np.count_nonzero(side))}
 
@@ -339,11 +354,14 @@ class _LatticeGeometry:
         self.bulk = bulk
         self.d0 = self.ref[bulk[:, 1]] - self.ref[bulk[:, 0]]
         self.K = bulk_bond_stiffness(self.d0, kn, kt)
+        self.kn = kn
 
 
 def _bonds(run, geo, snap) -> dict:
     """Every bond of a snapshot in ``contour_flux``'s form: the bulk bonds, and each intact interface bond
-    from its top node to its substrate node with K = diag(k_x, k_y), d0 = (-x0, -delta0), x0 = 0."""
+    from its top node to its substrate node with K = diag(k_x, k_y), d0 = (-x0, -delta0), x0 = 0; with
+    ``time.damping = "bonds"``, "beta": zeta / k_n of its block on a bulk bond, 0 on an interface bond (the
+    engine's dashpots, ``model.damping``)."""
     cells, flag = snap["cells"], snap["interface"]
     iface = cells[(flag == 1) & (cells[:, 0] != cells[:, 1])]
     site = geo.col[iface[:, 0]] - geo.lat.top.col0
@@ -352,8 +370,11 @@ def _bonds(run, geo, snap) -> dict:
     Ki[:, 0, 0], Ki[:, 1, 1] = kx, ky
     d0 = np.zeros((len(iface), 2))
     d0[:, 1] = -float(run.scene["interface.delta0"])
-    return {"i": np.concatenate([geo.bulk[:, 0], iface[:, 0]]), "j": np.concatenate([geo.bulk[:, 1], iface[:, 1]]),
-            "K": np.concatenate([geo.K, Ki]), "d0": np.concatenate([geo.d0, d0])}
+    out = {"i": np.concatenate([geo.bulk[:, 0], iface[:, 0]]), "j": np.concatenate([geo.bulk[:, 1], iface[:, 1]]),
+           "K": np.concatenate([geo.K, Ki]), "d0": np.concatenate([geo.d0, d0])}
+    if run.scene.get("time.damping", "absolute") == "bonds":
+        out["beta"] = np.concatenate([float(run.scene["time.zeta"]) / geo.kn, np.zeros(len(iface))])
+    return out
 
 
 def route1_blocker(run) -> tuple | None:
@@ -364,8 +385,8 @@ def route1_blocker(run) -> tuple | None:
     if s.get("interface.reform_x0", "zero") != "zero":
         return ("interface.reform_x0", s["interface.reform_x0"],
                 "route 1 reads interface bonds from positions, so it needs rest offsets 0 ('zero')")
-    if s.get("time.damping", "absolute") != "absolute":
-        return "time.damping", s["time.damping"], "route 1 subtracts 'absolute' damping only"
+    if s.get("time.damping", "absolute") not in ("absolute", "bonds"):
+        return "time.damping", s["time.damping"], "route 1 subtracts 'absolute' or 'bonds' damping"
     return None
 
 
@@ -383,7 +404,8 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
         _refuse(run, *blocker)
     lam, st = process_zone(run), steady_stretch(front)
     c_r, dt, l = float(run.attrs["c_r"]), float(run.attrs["dt"]), float(run.attrs["l"])
-    zeta = float(run.scene.get("time.zeta", 0.0))
+    # The body drag's rate; the bonds' dashpots travel with the bonds (``_bonds``).
+    zeta = float(run.scene.get("time.zeta", 0.0)) if run.scene.get("time.damping", "absolute") == "absolute" else 0.0
     times = np.asarray(run.snapshot_times, float)
     inside = np.flatnonzero((times >= st["t0"]) & (times <= st["t1"]))
     geo = _LatticeGeometry(run) if len(inside) else None
@@ -560,7 +582,7 @@ ROUTE1_DOC = ("mean over the snapshots inside the front's steady stretch (the mi
               "without such a snapshot (write them by a restart with a dense output.snapshots cadence: "
               "docs/guide/analysis.md, G and Gamma), where the box leaves the free lattice (a block thinner "
               "than the box), or for a run route 1 cannot read (rigid substrate, interface.reform_x0 other than "
-              "zero, time.damping other than absolute)")
+              "zero)")
 
 
 @front_field("G_contour_inner", "m c_r^2/a", "G by route 1 (analysis.cracks): the energy flux into a lattice "
