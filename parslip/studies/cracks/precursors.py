@@ -1,0 +1,171 @@
+"""Precursors longer than their process zone (docs/studies/cracks.md, section 2).
+
+The push through a soft loader (``drive.spring``) at three loading heights (``drive.rows``), two normal loads
+and both readings of a re-formed bond's rest offset (``interface.reform_x0`` "zero" and "current"), swept by
+``run/studies/cracks_precursors*.toml``.  For every run: each arrested front (``run.precursors()``), its
+length in units of Lambda (``analysis.cracks.process_zone``, the Palmer-Rice length), F_T/F_N at its arrest
+(mu at the first frame after its tip's last advance) and the arrest fracture mechanics predicts for it
+(``analysis.arrest.arrest_prediction``).  Per reading and height, the straight line L/Lambda = slope *
+F_T/F_N + intercept through the precursors of both normal loads, with its r^2 (Katano et al. 2014 find one
+line per regime whatever the height; Rubinstein et al. 2007 one per loading configuration).
+
+Tables: ``cracks_precursors.csv`` a row per run (``n_precursors``, ``min_length_over_lambda``, the height's
+``slope`` and ``r2``), ``cracks_precursors_arrests.csv`` a row per precursor (measured and predicted
+length); figures ``img/cracks_precursors_length.png`` (length against F_T/F_N) and
+``img/cracks_precursors_prediction.png`` (predicted against measured).
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from parslip.analysis import table
+from parslip.analysis.arrest import arrest_prediction
+from parslip.analysis.cracks import process_zone
+from parslip.plot.figures import pyplot, save
+
+from . import points, sweeps, write
+
+RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_precursors",
+            "n_from_edge", "min_length_over_lambda", "max_length_over_lambda", "Lambda", "slope", "intercept",
+            "r2", "n_fit", "median_pred_over_measured"]
+ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "nucleation_x", "arrest_time", "mu_arrest",
+               "length_over_lambda", "predicted_over_lambda", "G_over_Gamma_at_arrest", "tau_r", "Gamma"]
+HEIGHTS = ("low", "mid", "high", "face")
+
+
+def height_of(rows, top_rows: int) -> str:
+    """The loading height's name: "face" for the whole face, else by the middle of the driven rows'
+    band: the lowest, middle or highest third of the block."""
+    if not rows:
+        return "face"
+    mid = 0.5 * (rows[0] + rows[-1]) / max(top_rows - 1, 1)
+    return "low" if mid < 1 / 3 else ("mid" if mid < 2 / 3 else "high")
+
+
+def _mu_at(run, time: float) -> float:
+    t, mu = np.asarray(run.interface["t"], float), np.asarray(run.interface["mu"], float)
+    return float(mu[min(int(np.searchsorted(t, time, side="right")), len(t) - 1)])
+
+
+def run_arrests(row, run) -> tuple[dict, list[dict]]:
+    """The run's row (without the fit) and a row per precursor."""
+    s = run.scene
+    lam = process_zone(run)
+    ns = len(run.x)
+    head = {"point": row["point"], "reading": s["interface.reform_x0"], "F_N": float(s["load.FN"]),
+            "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])),
+            "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "scene": row["scene"],
+            "commit": row["commit"]}
+    fr = run.fronts()
+    arrests = []
+    for i, p in enumerate(run.precursors()):
+        pred = arrest_prediction(run, p)
+        arrests.append({**head, "precursor": i, "nucleation_x": p.nucleation_x, "arrest_time": p.arrest_time,
+                        "mu_arrest": _mu_at(run, p.arrest_time), "length_over_lambda": p.arrest_length * ns / lam,
+                        "predicted_over_lambda": pred["L_predicted"] / lam,
+                        "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r": pred["tau_r"],
+                        "Gamma": pred["Gamma"], "from_edge": pred["from_edge"]})
+    L = [a["length_over_lambda"] for a in arrests]
+    ratio = [a["predicted_over_lambda"] / a["length_over_lambda"] for a in arrests
+             if math.isfinite(a["predicted_over_lambda"])]
+    nan = math.nan
+    out = {**head, "n_fronts": len(fr), "n_crossed": sum(f.fate == "crossed" for f in fr),
+           "n_precursors": len(arrests), "n_from_edge": sum(a["from_edge"] for a in arrests),
+           "min_length_over_lambda": min(L) if L else nan, "max_length_over_lambda": max(L) if L else nan,
+           "Lambda": lam, "median_pred_over_measured": float(np.median(ratio)) if ratio else nan}
+    return out, arrests
+
+
+def line_fit(x, y) -> dict:
+    """Least squares y = slope x + intercept with r^2; NaN with fewer than 3 points or no spread in x."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(x) < 3 or np.ptp(x) == 0:
+        return {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": len(x)}
+    slope, icpt = np.polyfit(x, y, 1)
+    res = y - (slope * x + icpt)
+    ss = float(np.sum((y - y.mean()) ** 2))
+    return {"slope": float(slope), "intercept": float(icpt), "r2": 1.0 - float(np.sum(res ** 2)) / ss if ss else
+            math.nan, "n_fit": len(x)}
+
+
+def fits(arrests: list[dict]) -> dict:
+    """(reading, height) -> ``line_fit`` of length_over_lambda against mu_arrest over both normal loads."""
+    keys = sorted({(a["reading"], a["height"]) for a in arrests})
+    return {k: line_fit([a["mu_arrest"] for a in arrests if (a["reading"], a["height"]) == k],
+                        [a["length_over_lambda"] for a in arrests if (a["reading"], a["height"]) == k])
+            for k in keys}
+
+
+def length_figure(arrests, fit, img, source):
+    plt = pyplot()
+    readings = sorted({a["reading"] for a in arrests}) or ["current", "zero"]
+    fig, axes = plt.subplots(1, len(readings), figsize=(5 * len(readings), 4), squeeze=False)
+    colors = dict(zip(HEIGHTS, ("C0", "C1", "C2", "C3")))
+    for ax, rd in zip(axes[0], readings):
+        mine = [a for a in arrests if a["reading"] == rd]
+        for (r, h), f in fit.items():
+            if r != rd:
+                continue
+            sel = [a for a in mine if a["height"] == h]
+            for fn, mk in zip(sorted({a["F_N"] for a in sel}), "os^"):
+                pts = [a for a in sel if a["F_N"] == fn]
+                ax.plot([a["mu_arrest"] for a in pts], [a["length_over_lambda"] for a in pts], mk, color=colors[h],
+                        mfc="none" if fn != max(a["F_N"] for a in sel) else colors[h],
+                        label=f"{h}, F_N = {fn:g}")
+            if math.isfinite(f["slope"]):
+                xs = np.array([min(a["mu_arrest"] for a in sel), max(a["mu_arrest"] for a in sel)])
+                ax.plot(xs, f["slope"] * xs + f["intercept"], "-", color=colors[h], lw=0.8)
+        ax.axhline(3.0, color="k", ls=":", lw=0.8)
+        if not mine:
+            ax.text(0.5, 0.5, "no front arrested inside the contact", ha="center", va="center",
+                    transform=ax.transAxes)
+        else:
+            ax.legend(fontsize=6)
+        ax.set_xlabel("F_T / F_N at the arrest")
+        ax.set_ylabel("arrest length / Lambda")
+        ax.set_title(f'reform_x0 = "{rd}": {len(mine)} precursors (dotted: 3 Lambda)', fontsize=8)
+    return save(fig, img, "cracks_precursors_length", source)
+
+
+def prediction_figure(arrests, img, source):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 4))
+    pts = [a for a in arrests if math.isfinite(a["predicted_over_lambda"])]
+    for rd, mk in (("current", "o"), ("zero", "s")):
+        sel = [a for a in pts if a["reading"] == rd]
+        if sel:
+            ax.plot([a["length_over_lambda"] for a in sel], [a["predicted_over_lambda"] for a in sel], mk,
+                    mfc="none", label=f'"{rd}" ({len(sel)})')
+    top = max([a["length_over_lambda"] for a in pts] + [a["predicted_over_lambda"] for a in pts] + [1.0])
+    ax.plot([0, top], [0, top], "k-", lw=0.6)
+    ax.set_xlabel("measured arrest length / Lambda")
+    ax.set_ylabel("predicted (G falls to Gamma) / Lambda")
+    ax.set_title("arrests from the driven edge: LEFM against the lattice", fontsize=8)
+    if pts:
+        ax.legend(fontsize=7)
+    return save(fig, img, "cracks_precursors_prediction", source)
+
+
+def tabulate(runs: str, img: str, tables: str) -> str:
+    """Both tables and both figures (module docstring); returns the Markdown of the runs' table."""
+    rows, arrests = [], []
+    for d in sweeps(runs, "precursors"):
+        for row, run in points(d):
+            if run is None:
+                continue
+            r, a = run_arrests(row, run)
+            rows.append(r)
+            arrests += a
+    fit = fits(arrests)
+    nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
+    for r in rows:
+        r.update(fit.get((r["reading"], r["height"]), nan))
+    table.write_csv(os.path.join(tables, "cracks_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
+                    arrests)
+    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    length_figure(arrests, fit, img, source)
+    prediction_figure(arrests, img, source)
+    return write(rows, RUN_COLS, os.path.join(tables, "cracks_precursors.csv"))
