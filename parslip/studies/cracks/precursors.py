@@ -31,7 +31,8 @@ from . import points, sweeps, write
 RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_precursors",
             "n_from_edge", "min_length_over_lambda", "max_length_over_lambda", "Lambda", "slope", "intercept",
             "r2", "n_fit", "median_pred_over_measured"]
-ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "nucleation_x", "arrest_time", "mu_arrest",
+ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "nucleation_x", "arrest_time",
+               "mu_arrest",
                "length_over_lambda", "predicted_over_lambda", "G_over_Gamma_at_arrest", "tau_r", "Gamma"]
 HEIGHTS = ("low", "mid", "high", "face")
 
@@ -63,7 +64,7 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
     arrests = []
     for i, p in enumerate(run.precursors()):
         pred = arrest_prediction(run, p)
-        arrests.append({**head, "precursor": i, "nucleation_x": p.nucleation_x, "arrest_time": p.arrest_time,
+        arrests.append({**head, "precursor": i, "kind": p.kind, "nucleation_x": p.nucleation_x, "arrest_time": p.arrest_time,
                         "mu_arrest": _mu_at(run, p.arrest_time), "length_over_lambda": p.arrest_length * ns / lam,
                         "predicted_over_lambda": pred["L_predicted"] / lam,
                         "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r": pred["tau_r"],
