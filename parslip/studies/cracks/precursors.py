@@ -2,7 +2,8 @@
 
 The push through a soft loader (``drive.spring``) at three loading heights (``drive.rows``), two normal loads
 and both readings of a re-formed bond's rest offset (``interface.reform_x0`` "zero" and "current"), swept by
-``run/studies/cracks_precursors*.toml``.  For every run: each arrested front (``run.precursors()``), its
+``run/studies/cracks_precursors*.toml``.  For every run: each arrested front (``run.precursors()`` with the
+detector's patience ``max_gap`` = 300 a/c_r, as on l = 100), its
 length in units of Lambda (``analysis.cracks.process_zone``, the Palmer-Rice length), F_T/F_N at its arrest
 (mu at the first frame after its tip's last advance) and the arrest fracture mechanics predicts for it
 (``analysis.arrest.arrest_prediction``).  Per reading and height, the straight line L/Lambda = slope *
@@ -28,13 +29,23 @@ from parslip.plot.figures import pyplot, save
 
 from . import points, sweeps, write
 
-RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_precursors",
-            "n_from_edge", "min_length_over_lambda", "max_length_over_lambda", "Lambda", "slope", "intercept",
+RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
+            "n_from_edge", "n_over_3_lambda", "min_length_over_lambda", "max_length_over_lambda", "Lambda", "slope", "intercept",
             "r2", "n_fit", "median_pred_over_measured"]
 ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "nucleation_x", "arrest_time",
                "mu_arrest",
                "length_over_lambda", "predicted_over_lambda", "G_over_Gamma_at_arrest", "tau_r", "Gamma"]
 HEIGHTS = ("low", "mid", "high", "face")
+# The front detector's patience in a/c_r: its default (``fronts.MAX_GAP`` = 3 l/c_r) was set on l = 100 a; on a
+# longer contact the same 300 a/c_r keeps a slow tip's pause (one site at 0.01 c_r takes 100 a/c_r) one
+# front, where 3 l/c_r of l = 500 would count a precursor that the next front overran within 1500 a/c_r
+# (five precursor periods) as merged into it.
+PATIENCE = 300.0
+
+
+def max_gap(run) -> float:
+    """The detector's patience for ``run`` (l/c_r): ``PATIENCE`` a/c_r over its contact of l = sites * a."""
+    return PATIENCE / len(run.x)
 
 
 def height_of(rows, top_rows: int) -> str:
@@ -60,9 +71,9 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
             "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])),
             "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "scene": row["scene"],
             "commit": row["commit"]}
-    fr = run.fronts()
+    fr = run.fronts(max_gap=max_gap(run))
     arrests = []
-    for i, p in enumerate(run.precursors()):
+    for i, p in enumerate(run.precursors(max_gap=max_gap(run))):
         pred = arrest_prediction(run, p)
         arrests.append({**head, "precursor": i, "kind": p.kind, "nucleation_x": p.nucleation_x, "arrest_time": p.arrest_time,
                         "mu_arrest": _mu_at(run, p.arrest_time), "length_over_lambda": p.arrest_length * ns / lam,
@@ -74,6 +85,7 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
              if math.isfinite(a["predicted_over_lambda"])]
     nan = math.nan
     out = {**head, "n_fronts": len(fr), "n_crossed": sum(f.fate == "crossed" for f in fr),
+           "n_merged": sum(f.fate == "merged" for f in fr), "n_over_3_lambda": sum(x > 3.0 for x in L),
            "n_precursors": len(arrests), "n_from_edge": sum(a["from_edge"] for a in arrests),
            "min_length_over_lambda": min(L) if L else nan, "max_length_over_lambda": max(L) if L else nan,
            "Lambda": lam, "median_pred_over_measured": float(np.median(ratio)) if ratio else nan}
@@ -117,9 +129,11 @@ def length_figure(arrests, fit, img, source):
                         mfc="none" if fn != max(a["F_N"] for a in sel) else colors[h],
                         label=f"{h}, F_N = {fn:g}")
             if math.isfinite(f["slope"]):
-                xs = np.array([min(a["mu_arrest"] for a in sel), max(a["mu_arrest"] for a in sel)])
-                ax.plot(xs, f["slope"] * xs + f["intercept"], "-", color=colors[h], lw=0.8)
+                xs = np.linspace(min(a["mu_arrest"] for a in sel), max(a["mu_arrest"] for a in sel), 50)
+                ys = f["slope"] * xs + f["intercept"]
+                ax.plot(xs[ys > 0], ys[ys > 0], "-", color=colors[h], lw=0.8)
         ax.axhline(3.0, color="k", ls=":", lw=0.8)
+        ax.set_yscale("log")
         if not mine:
             ax.text(0.5, 0.5, "no front arrested inside the contact", ha="center", va="center",
                     transform=ax.transAxes)
@@ -132,21 +146,33 @@ def length_figure(arrests, fit, img, source):
 
 
 def prediction_figure(arrests, img, source):
+    """Left: the predicted arrest against the measured one, where G reached Gamma; right: G/Gamma at the
+    measured arrest for every precursor from the edge (LEFM puts it at 1)."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(4.5, 4))
-    pts = [a for a in arrests if math.isfinite(a["predicted_over_lambda"])]
-    for rd, mk in (("current", "o"), ("zero", "s")):
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 4))
+    edge = [a for a in arrests if a["from_edge"]]
+    pts = [a for a in edge if math.isfinite(a["predicted_over_lambda"])]
+    for rd, mk, c in (("current", "o", "C0"), ("zero", "s", "C1")):
         sel = [a for a in pts if a["reading"] == rd]
         if sel:
             ax.plot([a["length_over_lambda"] for a in sel], [a["predicted_over_lambda"] for a in sel], mk,
-                    mfc="none", label=f'"{rd}" ({len(sel)})')
+                    color=c, mfc="none", label=f'"{rd}" ({len(sel)})')
+        sel = [a for a in edge if a["reading"] == rd and math.isfinite(a["G_over_Gamma_at_arrest"])]
+        if sel:
+            bx.plot([a["length_over_lambda"] for a in sel], [a["G_over_Gamma_at_arrest"] for a in sel], mk,
+                    color=c, mfc="none", label=f'"{rd}" ({len(sel)})')
     top = max([a["length_over_lambda"] for a in pts] + [a["predicted_over_lambda"] for a in pts] + [1.0])
     ax.plot([0, top], [0, top], "k-", lw=0.6)
     ax.set_xlabel("measured arrest length / Lambda")
     ax.set_ylabel("predicted (G falls to Gamma) / Lambda")
-    ax.set_title("arrests from the driven edge: LEFM against the lattice", fontsize=8)
-    if pts:
-        ax.legend(fontsize=7)
+    ax.set_title(f"{len(pts)} of {len(edge)} edge precursors reach G = Gamma", fontsize=8)
+    bx.axhline(1.0, color="k", lw=0.6)
+    bx.set_xlabel("measured arrest length / Lambda")
+    bx.set_ylabel("static G / Gamma at the measured arrest")
+    bx.set_title("LEFM arrest: G = Gamma (line)", fontsize=8)
+    for a_ in (ax, bx):
+        if a_.lines[:-1] or (a_ is bx and len(a_.lines) > 1):
+            a_.legend(fontsize=7)
     return save(fig, img, "cracks_precursors_prediction", source)
 
 
