@@ -30,11 +30,11 @@ from parslip.plot.figures import pyplot, save
 from . import points, sweeps, write
 
 RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
-            "n_from_edge", "n_over_3_lambda", "min_length_over_lambda", "max_length_over_lambda", "Lambda", "slope", "intercept",
-            "r2", "n_fit", "median_pred_over_measured"]
+            "n_from_edge", "n_over_3_lambda", "min_length_over_lambda", "max_length_over_lambda",
+            "median_width_over_lambda", "Lambda", "slope", "intercept", "r2", "n_fit", "median_pred_over_measured"]
 ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "nucleation_x", "arrest_time",
-               "mu_arrest",
-               "length_over_lambda", "predicted_over_lambda", "G_over_Gamma_at_arrest", "tau_r", "Gamma"]
+               "mu_arrest", "length_over_lambda", "width_over_lambda", "predicted_over_lambda",
+               "G_over_Gamma_at_arrest", "tau_r", "Gamma"]
 HEIGHTS = ("low", "mid", "high", "face")
 # The front detector's patience in a/c_r: its default (``fronts.MAX_GAP`` = 3 l/c_r) was set on l = 100 a; on a
 # longer contact the same 300 a/c_r keeps a slow tip's pause (one site at 0.01 c_r takes 100 a/c_r) one
@@ -77,6 +77,7 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
         pred = arrest_prediction(run, p)
         arrests.append({**head, "precursor": i, "kind": p.kind, "nucleation_x": p.nucleation_x, "arrest_time": p.arrest_time,
                         "mu_arrest": _mu_at(run, p.arrest_time), "length_over_lambda": p.arrest_length * ns / lam,
+                        "width_over_lambda": p.front.width / lam,
                         "predicted_over_lambda": pred["L_predicted"] / lam,
                         "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r": pred["tau_r"],
                         "Gamma": pred["Gamma"], "from_edge": pred["from_edge"]})
@@ -88,6 +89,7 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
            "n_merged": sum(f.fate == "merged" for f in fr), "n_over_3_lambda": sum(x > 3.0 for x in L),
            "n_precursors": len(arrests), "n_from_edge": sum(a["from_edge"] for a in arrests),
            "min_length_over_lambda": min(L) if L else nan, "max_length_over_lambda": max(L) if L else nan,
+           "median_width_over_lambda": float(np.median([a["width_over_lambda"] for a in arrests])) if arrests else nan,
            "Lambda": lam, "median_pred_over_measured": float(np.median(ratio)) if ratio else nan}
     return out, arrests
 
