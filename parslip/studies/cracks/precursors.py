@@ -29,12 +29,15 @@ from parslip.plot.figures import pyplot, save
 
 from . import points, sweeps, write
 
+# The readings this study departs from the defaults in, named so that the tables declare them: the matched
+# pair's substrate stiffness, the damping's form and rate, the contact under unbonded sites.
+READING_COLS = ["bottom_kn", "damping", "zeta", "contact"]
 RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
             "n_from_edge", "n_over_3_lambda", "min_length_over_lambda", "max_length_over_lambda",
-            "median_width_over_lambda", "Lambda", "slope", "intercept", "r2", "n_fit", "median_pred_over_measured"]
+            "median_width_over_lambda", "Lambda", "slope", "intercept", "r2", "n_fit", "median_pred_over_measured"] + READING_COLS
 ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "nucleation_x", "arrest_time",
                "mu_arrest", "length_over_lambda", "width_over_lambda", "predicted_over_lambda",
-               "G_over_Gamma_at_arrest", "tau_r", "Gamma"]
+               "G_over_Gamma_at_arrest", "tau_r", "Gamma"] + READING_COLS
 HEIGHTS = ("low", "mid", "high", "face")
 # The front detector's patience in a/c_r: its default (``fronts.MAX_GAP`` = 3 l/c_r) was set on l = 100 a; on a
 # longer contact the same 300 a/c_r keeps a slow tip's pause (one site at 0.01 c_r takes 100 a/c_r) one
@@ -70,7 +73,8 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
     head = {"point": row["point"], "reading": s["interface.reform_x0"], "F_N": float(s["load.FN"]),
             "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])),
             "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "scene": row["scene"],
-            "commit": row["commit"]}
+            "commit": row["commit"], "bottom_kn": s["material.bottom_kn"], "damping": s["time.damping"],
+            "zeta": s["time.zeta"], "contact": s["interface.contact"]}
     fr = run.fronts(max_gap=max_gap(run))
     arrests = []
     for i, p in enumerate(run.precursors(max_gap=max_gap(run))):
