@@ -113,3 +113,49 @@ def test_traction_drop_of_a_known_traction_history():
     assert FIELDS["traction_drop"].units == "rho c_r^2" and "dtau" in table([f])
     it.pop("sxy")
     assert Run.from_arrays(it).fronts()[0].traction_drop is None
+
+
+def test_andrews_lc_is_xia_et_al_form_for_the_central_force_lattice():
+    """With k_t = 0 the Born continuum is isotropic with plane-stress nu = 1/3 and mu = (sqrt 3 / 4) k_n, so
+    the static mode II modulus of ``cracks.mode2_compliance`` makes ``andrews_lc`` Xia et al.'s (Science
+    2004) L_c = (1 + nu)/pi mu (tau_p - tau_r) D_c / (tau_0 - tau_r)^2; f(S) = 9.8 (1.77 - S)^-3, none
+    from S = 1.77 up."""
+    from parslip.analysis.cracks import mode2_compliance
+    kn = 2.7
+    M = 1.0 / mode2_compliance(0.0, kn, 0.0)
+    mu, nu = math.sqrt(3) / 4 * kn, 1.0 / 3.0
+    tau_p, tau_0, tau_r, d_c = 0.05, 0.031, 0.004, 0.42
+    xia = (1 + nu) / math.pi * mu * (tau_p - tau_r) * d_c / (tau_0 - tau_r) ** 2
+    assert rupture.andrews_lc(M, tau_p, tau_0, tau_r, d_c) == pytest.approx(xia, rel=1e-5)   # H(0) is taken at v = 1e-3 c
+    assert rupture.andrews_f(0.77) == pytest.approx(9.8) and math.isnan(rupture.andrews_f(1.77))
+    assert rupture.andrews_f(0.3) == pytest.approx(9.8 / 1.47 ** 3)
+
+
+def test_transition_of_a_drawn_daughter_against_andrews():
+    """The daughter record of the first test, as cracks, with tractions: tau_0 = 1 before the fronts, 2 at each break
+    (S = (2 - 1)/(1 - 0) = 1), on a 60-site contact of 60 a.  The daughter is born 30 sites from the mother's
+    first site: L_trans = 30 a; L_andrews = f(1) L_c with L_c computed here from the block's modulus."""
+    from parslip.analysis.cracks import mode2_compliance
+    from parslip.model.physics import DENSITY, Material
+    it = blank(4 * NS + 40)
+    draw(it, 10, 0, +1, 4, 2, 0.001, crack=True)
+    draw(it, 30, 30, +1, 1, 2, 0.001, crack=True)         # the daughter runs to the far edge
+    nf = len(it["t"])
+    broken = it["intact"] == 0
+    it["sxy"] = np.where(broken, 0.0, 1.0)
+    it["step"] = np.arange(nf)
+    k, site = np.nonzero(broken[1:] != broken[:-1])
+    kind = np.where(broken[k + 1, site], EVENT_BREAK, EVENT_FORM).astype(np.uint8)
+    it["events"] = {"step": k, "time": k * DT, "site": site, "kind": kind, "partner": site, "site_column0": 0,
+                    "dt": DT, "c_s": math.inf, "c_l": math.inf, "traction": np.where(kind == EVENT_BREAK, 2.0, 0.0)}
+    scene = {"lattice.top_cols": NS, "interface.kx": 0.1, "material.nu": 0.2, "material.model": "plane_strain",
+             "material.velocity_unit": "c_r", "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
+    run = Run.from_arrays(it, scene=scene)
+    fr = run.fronts()
+    got = rupture.transition(run, fr[0])
+    m = Material.from_scene(0.2, "plane_strain", "c_r", 2.81154, 0.133883, "along")
+    unit = DENSITY * m.c_r ** 2
+    L_c = (2.0 * unit) * (2.0 * unit / 0.1) / (math.pi * mode2_compliance(0.0, m.kn_top, m.kt_top) * unit ** 2)
+    assert got["S"] == pytest.approx(1.0) and got["L_trans"] == pytest.approx(30.0)
+    assert got["L_c"] == pytest.approx(L_c, rel=1e-9) and got["L_andrews"] == pytest.approx(9.8 / 0.77 ** 3 * L_c)
+    assert got["daughter"] == 1 and got["v_super"] == pytest.approx((1 / NS) / DT, rel=1e-6)

@@ -6,6 +6,11 @@ andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / 
                                 along the front's path, and its median (the 2D supershear threshold is
                                 S ~ 1.77); the per-front field ``andrews_s`` is that median
 daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
+andrews_lc, andrews_f           Andrews' (1976) critical half-length L_c and his transition factor f(S) as Xia
+                                et al. (Science 2004) fit it: L_trans = f(S) L_c
+transition(run, front)          where a front went supershear: the distance from its nucleation at which a
+                                daughter was born ahead of it (or its tip first ran above c_s), Andrews'
+                                L_trans for the S measured on it, and the speed the supershear front settled at
 speed_summary(run)              the largest local speed fitted over the catalogue's window, and how many
                                 sites ran above c_s or broke in bursts
 through_patch(front, lo, hi)    how a front met a patch [lo, hi) of the contact: its mean speed before,
@@ -21,6 +26,7 @@ import math
 import numpy as np
 
 from ..io.contract import EVENT_BREAK
+from ..model.physics import DENSITY
 from .fronts import Front, front_field
 
 # S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
@@ -124,6 +130,86 @@ def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
                 out.append({"mother": i, "daughter": j, "t": d.nucleation_time, "x": d.nucleation_x,
                             "ahead": float(ahead)})
     return out
+
+
+# Xia, Rosakis & Kanamori (Science 2004): their fit to Andrews' (1976) transition lengths of a 2D slip-weakening
+# crack, L_trans / L_c = 9.8 (1.77 - S)^-3.
+ANDREWS_F_COEF = 9.8
+
+
+def andrews_f(S):
+    """Andrews' transition factor f(S) = L_trans / L_c = 9.8 (1.77 - S)^-3 (Xia et al. 2004's fit to Andrews
+    1976, Fig. 6); NaN from S = 1.77 up (no transition in 2D) and for NaN."""
+    S = np.asarray(S, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(S < ANDREWS_S_2D, ANDREWS_F_COEF / (ANDREWS_S_2D - S) ** 3, math.nan)
+
+
+def andrews_lc(modulus: float, tau_p, tau_0, tau_res, d_c):
+    """Andrews' (1976) critical half-length of a mode II slip-weakening crack (units of d_c):
+
+        L_c = M (tau_p - tau_res) D_c / (pi (tau_0 - tau_res)^2)
+
+    the Griffith half-length of a crack under the stress drop tau_0 - tau_res (K_II = (tau_0 - tau_res)
+    sqrt(pi L), G = K_II^2 / (2 M)) whose fracture energy is that of the linear slip-weakening law,
+    Gamma = (tau_p - tau_res) D_c / 2.  M is the static mode II modulus, G = K^2 / (2 M): mu / (1 - nu) in
+    plane strain, mu (1 + nu) in plane stress, which is Xia et al.'s (1 + nu) / pi form; for the Born lattice
+    ``cracks.mode2_compliance`` gives 1 / M.  Tractions and M in one unit (stress), d_c a length."""
+    drop = np.asarray(tau_0, float) - np.asarray(tau_res, float)
+    return modulus * (np.asarray(tau_p, float) - np.asarray(tau_res, float)) * np.asarray(d_c, float) / \
+        (math.pi * drop * drop)
+
+
+def _modulus_and_stress_unit(run) -> tuple[float, float]:
+    """The block's static mode II modulus M = 1 / H(0) (internal stress units, m c^2 / a^2) and the internal
+    stress of one rho c_r^2 (the unit of ``/interface/sxy``)."""
+    from .cracks import _material, mode2_compliance
+    m = _material(run)
+    return 1.0 / mode2_compliance(0.0, m.kn_top, m.kt_top), DENSITY * m.c_r * m.c_r
+
+
+def transition(run, front: Front, **kw) -> dict:
+    """Where ``front`` went supershear, against Andrews' curve.  Lengths in a, speeds in c_r.
+
+      S, tau_0, tau_peak, tau_res   ``andrews_s`` of the front (medians over its path, rho c_r^2)
+      d_c          the bond's slip at its break, D_c = x_b = tau_peak a / k_x (the sites' median k_x; a bond
+                   whose rest offset is 0 holds k_x x / a up to its break)
+      L_c          ``andrews_lc`` with the block's M (the Born continuum's static mode II modulus)
+      L_andrews    f(S) L_c (``andrews_f``): Andrews' transition distance for the S measured
+      L_trans      the distance from the front's nucleation (its first break) to the birth of the first
+                   daughter born ahead of its tip (``daughters``), NaN when none was
+      L_fast       the distance from its nucleation to the first site its tip reached above c_s (its first
+                   supershear stretch, ``Front.supershear``), NaN when it never ran there
+      v_super      the speed the supershear front settled at: the daughter's steady speed (over the middle
+                   60 % of its sites) when there is one, else the mother's mean over its supershear stretches
+      daughter     the daughter's catalogue index, or None."""
+    l = float(run.scene["lattice.top_cols"])
+    M, unit = _modulus_and_stress_unit(run)
+    s = andrews_s(run, front)
+    kx = float(np.median(run.interface["kx"])) if "kx" in run.interface else float(run.scene["interface.kx"])
+    tp, t0, tr = (s[k] * unit for k in ("tau_peak", "tau_0", "tau_res"))
+    d_c = tp / kx
+    L_c = float(andrews_lc(M, tp, t0, tr, d_c))
+    fronts = run.fronts(**kw)
+    me = next((i for i, f in enumerate(fronts) if f is front or (f.nucleation_time == front.nucleation_time
+               and f.nucleation_x == front.nucleation_x)), None)
+    kids = sorted((d for d in daughters(run, **kw) if d["mother"] == me), key=lambda d: d["t"])
+    L_trans, v_super, kid = math.nan, math.nan, None
+    if kids:
+        kid = kids[0]["daughter"]
+        L_trans = abs(kids[0]["x"] - front.nucleation_x) * l
+        v_super = abs(fronts[kid].steady_speed)
+    L_fast = math.nan
+    if front.supershear:
+        first = min(front.supershear, key=lambda st: st["t"][0])
+        L_fast = abs(first["x"][0] - front.nucleation_x) * l
+        if kid is None:                   # the mean speed over its supershear stretches, each end to end
+            dx = sum(abs(st["x"][1] - st["x"][0]) for st in front.supershear)
+            dt = sum(st["t"][1] - st["t"][0] for st in front.supershear)
+            v_super = dx / dt if dt > 0 else math.nan
+    return {"S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"], "tau_res": s["tau_res"],
+            "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])), "L_trans": L_trans,
+            "L_fast": L_fast, "v_super": v_super, "daughter": kid}
 
 
 def speed_summary(run, **kw) -> dict:
