@@ -134,7 +134,8 @@ def test_andrews_lc_is_xia_et_al_form_for_the_central_force_lattice():
 def test_transition_of_a_drawn_daughter_against_andrews():
     """The daughter record of the first test, as cracks, with tractions: tau_0 = 1 before the fronts, 2 at each break
     (S = (2 - 1)/(1 - 0) = 1), on a 60-site contact of 60 a.  The daughter is born 30 sites from the mother's
-    first site: L_trans = 30 a; L_andrews = f(1) L_c with L_c computed here from the block's modulus."""
+    first site: L_trans = 30 a (20 a from an origin at site 10; none when only what is beyond site 40 counts);
+    L_andrews = f(1) L_c with L_c computed here from the block's modulus."""
     from parslip.analysis.cracks import mode2_compliance
     from parslip.model.physics import DENSITY, Material
     it = blank(4 * NS + 40)
@@ -159,3 +160,7 @@ def test_transition_of_a_drawn_daughter_against_andrews():
     assert got["S"] == pytest.approx(1.0) and got["L_trans"] == pytest.approx(30.0)
     assert got["L_c"] == pytest.approx(L_c, rel=1e-9) and got["L_andrews"] == pytest.approx(9.8 / 0.77 ** 3 * L_c)
     assert got["daughter"] == 1 and got["v_super"] == pytest.approx((1 / NS) / DT, rel=1e-6)
+    moved = rupture.transition(run, fr[0], origin=10.5 / NS)     # counted from site 10: 20 sites to the daughter
+    assert moved["L_trans"] == pytest.approx(20.0) and moved["daughter"] == 1
+    late = rupture.transition(run, fr[0], beyond=40.5 / NS)       # a daughter born before x = 40 sites is not one
+    assert math.isnan(late["L_trans"]) and late["daughter"] is None

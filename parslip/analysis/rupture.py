@@ -168,18 +168,22 @@ def _modulus_and_stress_unit(run) -> tuple[float, float]:
     return 1.0 / mode2_compliance(0.0, m.kn_top, m.kt_top), DENSITY * m.c_r * m.c_r
 
 
-def transition(run, front: Front, **kw) -> dict:
-    """Where ``front`` went supershear, against Andrews' curve.  Lengths in a, speeds in c_r.
+def transition(run, front: Front, origin: float | None = None, beyond: float | None = None, **kw) -> dict:
+    """Where ``front`` went supershear, against Andrews' curve.  Lengths in a, speeds in c_r.  Distances are
+    counted from ``origin`` (x/l; default the front's nucleation, its first break: give the centre of a
+    nucleation patch, Andrews' hypocentre, when the patch breaks at once), and only what happens beyond
+    ``beyond`` (x/l, in the front's direction; default the origin) counts: the breaks of a nucleation patch,
+    nearly simultaneous, are no transition.
 
       S, tau_0, tau_peak, tau_res   ``andrews_s`` of the front (medians over its path, rho c_r^2)
       d_c          the bond's slip at its break, D_c = x_b = tau_peak a / k_x (the sites' median k_x; a bond
                    whose rest offset is 0 holds k_x x / a up to its break)
       L_c          ``andrews_lc`` with the block's M (the Born continuum's static mode II modulus)
       L_andrews    f(S) L_c (``andrews_f``): Andrews' transition distance for the S measured
-      L_trans      the distance from the front's nucleation (its first break) to the birth of the first
-                   daughter born ahead of its tip (``daughters``), NaN when none was
-      L_fast       the distance from its nucleation to the first site its tip reached above c_s (its first
-                   supershear stretch, ``Front.supershear``), NaN when it never ran there
+      L_trans      the distance from the origin to the birth of the first daughter born ahead of its tip
+                   (``daughters``) beyond ``beyond``, NaN when none was
+      L_fast       the distance from the origin to the first site beyond ``beyond`` its tip reached above c_s
+                   (its first supershear stretch there, ``Front.supershear``), NaN when it never ran there
       v_super      the speed the supershear front settled at: the daughter's steady speed (over the middle
                    60 % of its sites) when there is one, else the mother's mean over its supershear stretches
       daughter     the daughter's catalogue index, or None."""
@@ -193,19 +197,26 @@ def transition(run, front: Front, **kw) -> dict:
     fronts = run.fronts(**kw)
     me = next((i for i, f in enumerate(fronts) if f is front or (f.nucleation_time == front.nucleation_time
                and f.nucleation_x == front.nucleation_x)), None)
-    kids = sorted((d for d in daughters(run, **kw) if d["mother"] == me), key=lambda d: d["t"])
+    x0 = front.nucleation_x if origin is None else origin
+    edge = x0 if beyond is None else beyond
+    d = front.direction or 1
+
+    def past(x: float) -> bool:
+        return (x - edge) * d > 0
+    kids = sorted((k for k in daughters(run, **kw) if k["mother"] == me and past(k["x"])), key=lambda k: k["t"])
     L_trans, v_super, kid = math.nan, math.nan, None
     if kids:
         kid = kids[0]["daughter"]
-        L_trans = abs(kids[0]["x"] - front.nucleation_x) * l
+        L_trans = abs(kids[0]["x"] - x0) * l
         v_super = abs(fronts[kid].steady_speed)
     L_fast = math.nan
-    if front.supershear:
-        first = min(front.supershear, key=lambda st: st["t"][0])
-        L_fast = abs(first["x"][0] - front.nucleation_x) * l
+    fast = [st for st in front.supershear if past(st["x"][0])]
+    if fast:
+        first = min(fast, key=lambda st: st["t"][0])
+        L_fast = abs(first["x"][0] - x0) * l
         if kid is None:                   # the mean speed over its supershear stretches, each end to end
-            dx = sum(abs(st["x"][1] - st["x"][0]) for st in front.supershear)
-            dt = sum(st["t"][1] - st["t"][0] for st in front.supershear)
+            dx = sum(abs(st["x"][1] - st["x"][0]) for st in fast)
+            dt = sum(st["t"][1] - st["t"][0] for st in fast)
             v_super = dx / dt if dt > 0 else math.nan
     return {"S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"], "tau_res": s["tau_res"],
             "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])), "L_trans": L_trans,

@@ -1,0 +1,125 @@
+"""Study 3 of docs/studies/cracks.md: the supershear transition against Andrews' S.
+
+Each point of ``run/studies/cracks_supershear.toml`` nucleates a crack at a weak patch (the last entry of
+``interface.patch``) in a uniformly prestressed T0 contact.  Its main front is the first front that
+nucleated in the patch running toward the far edge (+x, the longer side); ``rupture.transition`` gives,
+for it, S as measured (``andrews_s``), Andrews' L_c and L_andrews = f(S) L_c, the measured transition
+distance L_trans (the birth of a daughter ahead of its tip, from its nucleation) and the speed the
+supershear front settled at.  Lengths in a, speeds in c_r.
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from parslip.analysis import rupture
+from parslip.analysis.fronts import band_of, wave_speeds
+from parslip.plot.figures import pyplot, save
+
+from . import points, sweeps, write
+
+COLS = ["point", "rows", "v0", "patch_delta_b", "patch_width", "S", "tau0_over_taup", "L_c", "L_trans",
+        "L_andrews", "ratio", "L_fast", "reflection", "v_super", "v_super_over_c_s", "band", "main_band"]
+# The longitudinal wave reflected by the top and bottom rows overtakes a tip running at c_r at
+# 2 h c_r / sqrt(c_l^2 - c_r^2) from nucleation (h the block's height): after it the run is no longer an
+# unbounded body's.
+ROW_HEIGHT = math.sqrt(3.0) / 2.0
+
+
+def main_front(run):
+    """The first front nucleated inside the nucleation patch (the scene's last patch, widened by 2 sites)
+    that runs toward +x; None when there is none."""
+    lo, hi = run.scene["interface.patch"][-1]["x"]
+    pad = 2.0 / float(run.scene["lattice.top_cols"])
+    cand = [f for f in run.fronts() if f.direction > 0 and lo - pad <= f.nucleation_x <= hi + pad]
+    return min(cand, key=lambda f: f.nucleation_time) if cand else None
+
+
+def _row(row: dict, run) -> dict:
+    sc = run.scene if run is not None else {}
+    patch = (sc.get("interface.patch") or [{}])[-1]
+    l = float(sc.get("lattice.top_cols", math.nan))
+    out = {"point": row["point"], "rows": sc.get("lattice.top_rows"), "v0": sc.get("drive.v0"),
+           "patch_delta_b": patch.get("delta_b"),
+           "patch_width": (patch["x"][1] - patch["x"][0]) * l if "x" in patch else math.nan,
+           "scene": row["scene"], "commit": row["commit"]}
+    front = main_front(run) if run is not None else None
+    if front is None:
+        return {**out, **{c: math.nan for c in COLS if c not in out}, "band": None, "main_band": None}
+    lo, hi = patch["x"]
+    tr = rupture.transition(run, front, origin=0.5 * (lo + hi), beyond=hi)
+    waves = wave_speeds(run)
+    h = float(sc["lattice.top_rows"]) * ROW_HEIGHT
+    return {**out, "S": tr["S"], "tau0_over_taup": tr["tau_0"] / tr["tau_peak"], "L_c": tr["L_c"],
+            "L_trans": tr["L_trans"], "L_andrews": tr["L_andrews"], "ratio": tr["L_trans"] / tr["L_andrews"],
+            "L_fast": tr["L_fast"], "reflection": 2 * h / math.sqrt(waves["c_l"] ** 2 - 1.0),
+            "v_super": tr["v_super"], "v_super_over_c_s": tr["v_super"] / waves["c_s"],
+            "band": band_of(tr["v_super"], waves), "main_band": front.band,
+            "_front": front, "_run": run, "_tr": tr}
+
+
+def transition_figure(rows, img, source):
+    """L_trans / L_c against S, beside Andrews' 9.8 (1.77 - S)^-3 and its factor-1.5 band."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    S = np.linspace(0.0, 1.3, 200)
+    f = rupture.andrews_f(S)
+    ax.plot(S, f, "k-", lw=1, label="Andrews (1976), Xia et al. (2004): 9.8 (1.77 - S)$^{-3}$")
+    ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
+    for key, m, lab in (("L_trans", "o", "daughter born ahead of the tip"), ("L_fast", "s", "tip first above c_s")):
+        ok = [r for r in rows if np.isfinite(r["S"]) and np.isfinite(r[key])]
+        ax.plot([r["S"] for r in ok], [r[key] / r["L_c"] for r in ok], m, mfc="none" if m == "s" else None,
+                label=f"lattice: {lab}")
+    none = [r for r in rows if np.isfinite(r["S"]) and not np.isfinite(r["L_trans"])]
+    for r in none:
+        ax.annotate("no daughter", (r["S"], r["reflection"] / r["L_c"]), fontsize=6, ha="center")
+        ax.plot(r["S"], r["reflection"] / r["L_c"], "v", color="tab:red")
+    ax.set_yscale("log")
+    ax.set_xlabel("S measured on the run (andrews_s)")
+    ax.set_ylabel("transition distance / L_c")
+    ax.legend(fontsize=6)
+    ax.set_title("supershear transition on the matched pair, l = 500 a", fontsize=8)
+    return save(fig, img, "cracks_supershear_transition", source)
+
+
+def tips_figure(rows, img, source):
+    """Each run's main front and its daughter: distance from nucleation against time since it, with the
+    slopes of c_s and the block's c_l."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    waves = None
+    for i, r in enumerate(rows):
+        if "_front" not in r:
+            continue
+        run, f, tr = r["_run"], r["_front"], r["_tr"]
+        waves = waves or wave_speeds(run)
+        l = float(run.scene["lattice.top_cols"])
+        t0, x0 = f.nucleation_time, f.nucleation_x
+        line, = ax.plot((np.asarray(f.tip["t"]) - t0) * l, (np.asarray(f.tip["x"]) - x0) * l, lw=1,
+                        label=f"S = {r['S']:.2f}")
+        if tr["daughter"] is not None:
+            d = run.fronts()[tr["daughter"]]
+            ax.plot((np.asarray(d.tip["t"]) - t0) * l, (np.asarray(d.tip["x"]) - x0) * l, ":", lw=1.5,
+                    color=line.get_color())
+    if waves:
+        t = np.array([0.0, 250.0])
+        for key, ls in (("c_s", "--"), ("c_l", "-.")):
+            ax.plot(t, waves[key] * t, ls, color="0.5", lw=0.8, label=f"{key} = {waves[key]:.3g} c_r")
+    ax.set_xlabel("time since nucleation (a / c_r)")
+    ax.set_ylabel("tip's distance from nucleation (a)")
+    ax.legend(fontsize=6)
+    ax.set_title("main fronts (solid) and daughters (dotted)", fontsize=8)
+    return save(fig, img, "cracks_supershear_tips", source)
+
+
+def tabulate(runs: str, img: str, tables: str) -> str:
+    """cracks_supershear.csv (a row per run, ``COLS`` then scene and commit) and the two figures; returns
+    the Markdown table."""
+    rows = [_row(row, run) for d in sweeps(runs, "supershear") for row, run in points(d)]
+    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    md = write(rows, COLS, os.path.join(tables, "cracks_supershear.csv"))
+    transition_figure(rows, img, source)
+    tips_figure(rows, img, source)
+    return md
