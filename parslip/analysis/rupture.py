@@ -27,7 +27,7 @@ import numpy as np
 
 from ..io.contract import EVENT_BREAK
 from ..model.physics import DENSITY
-from .fronts import Front, front_field
+from .fronts import Front, front_field, wave_speeds
 
 # S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
 # 1.77 (tau_0 - tau_res).
@@ -168,12 +168,39 @@ def _modulus_and_stress_unit(run) -> tuple[float, float]:
     return 1.0 / mode2_compliance(0.0, m.kn_top, m.kt_top), DENSITY * m.c_r * m.c_r
 
 
-def transition(run, front: Front, origin: float | None = None, beyond: float | None = None, **kw) -> dict:
+# Sites over which the tip must run above c_s for its transition: about a process zone (Lambda = 17 a at
+# k_x = 0.1); over 10 sites the arrivals' jitter alone lifts a tip at c_R above c_s.
+MIN_SUPERSHEAR_SITES = 20
+
+
+def _first_supershear(front: Front, keep, c_s: float, n: int) -> tuple[float, float]:
+    """(x (l) of the first site from which the tip's arrivals over ``n`` consecutive sites, among the sites
+    ``keep(x)`` holds, fit a speed above ``c_s`` and those of every kept site from there on too; that last
+    speed, c_r); NaNs when there is no such site: a tip that ran at c_R (5 % below c_s in the lattice) with
+    a window's jitter above c_s did not go supershear.  A straight-line fit over n sites, not the catalogue's local fits: a burst of
+    near-simultaneous breaks inside the window does not hide the speed the tip keeps."""
+    x, t = np.asarray(front.tip["x"], float), np.asarray(front.tip["t"], float)
+    ok = np.array([keep(v) for v in x], bool)
+    x, t = x[ok], t[ok]
+    order = np.argsort(t, kind="stable")
+    x, t = x[order], t[order]
+    d = front.direction or 1
+    def speed(a: int, b: int) -> float:
+        return d * np.polyfit(t[a:b], x[a:b], 1)[0] if np.ptp(t[a:b]) > 0 else math.nan
+    for i in range(len(x) - n + 1):
+        if speed(i, i + n) > c_s and speed(i, len(x)) > c_s:
+            return float(x[i]), float(speed(i, len(x)))
+    return math.nan, math.nan
+
+
+def transition(run, front: Front, origin: float | None = None, beyond: float | None = None,
+               before: float | None = None, min_sites: int = MIN_SUPERSHEAR_SITES, **kw) -> dict:
     """Where ``front`` went supershear, against Andrews' curve.  Lengths in a, speeds in c_r.  Distances are
     counted from ``origin`` (x/l; default the front's nucleation, its first break: give the centre of a
     nucleation patch, Andrews' hypocentre, when the patch breaks at once), and only what happens beyond
-    ``beyond`` (x/l, in the front's direction; default the origin) counts: the breaks of a nucleation patch,
-    nearly simultaneous, are no transition.
+    ``beyond`` (x/l, in the front's direction; default the origin) and short of ``before`` (x/l; default
+    none) counts: the breaks of a nucleation patch, nearly simultaneous, are no transition, nor is a front
+    born at a free edge or a barrier the study does not look at.
 
       S, tau_0, tau_peak, tau_res   ``andrews_s`` of the front (medians over its path, rho c_r^2)
       d_c          the bond's slip at its break, D_c = x_b = tau_peak a / k_x (the sites' median k_x; a bond
@@ -182,10 +209,11 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
       L_andrews    f(S) L_c (``andrews_f``): Andrews' transition distance for the S measured
       L_trans      the distance from the origin to the birth of the first daughter born ahead of its tip
                    (``daughters``) beyond ``beyond``, NaN when none was
-      L_fast       the distance from the origin to the first site beyond ``beyond`` its tip reached above c_s
-                   (its first supershear stretch there, ``Front.supershear``), NaN when it never ran there
+      L_fast       the distance from the origin to the first site (beyond ``beyond``) from which the tip ran
+                   above c_s over ``min_sites`` sites (a line fitted through their arrivals), NaN when it never did
+                   (speeds in c_r; the run's c_s, ``fronts.wave_speeds``)
       v_super      the speed the supershear front settled at: the daughter's steady speed (over the middle
-                   60 % of its sites) when there is one, else the mother's mean over its supershear stretches
+                   60 % of its sites) when there is one, else the mother's, fitted from L_fast on
       daughter     the daughter's catalogue index, or None."""
     l = float(run.scene["lattice.top_cols"])
     M, unit = _modulus_and_stress_unit(run)
@@ -202,22 +230,18 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
     d = front.direction or 1
 
     def past(x: float) -> bool:
-        return (x - edge) * d > 0
+        return (x - edge) * d > 0 and (before is None or (before - x) * d > 0)
     kids = sorted((k for k in daughters(run, **kw) if k["mother"] == me and past(k["x"])), key=lambda k: k["t"])
     L_trans, v_super, kid = math.nan, math.nan, None
     if kids:
         kid = kids[0]["daughter"]
         L_trans = abs(kids[0]["x"] - x0) * l
         v_super = abs(fronts[kid].steady_speed)
-    L_fast = math.nan
-    fast = [st for st in front.supershear if past(st["x"][0])]
-    if fast:
-        first = min(fast, key=lambda st: st["t"][0])
-        L_fast = abs(first["x"][0] - x0) * l
-        if kid is None:                   # the mean speed over its supershear stretches, each end to end
-            dx = sum(abs(st["x"][1] - st["x"][0]) for st in fast)
-            dt = sum(st["t"][1] - st["t"][0] for st in fast)
-            v_super = dx / dt if dt > 0 else math.nan
+    L_fast, v_fast = _first_supershear(front, past, wave_speeds(run)["c_s"], min_sites)
+    if math.isfinite(L_fast):
+        L_fast = abs(L_fast - x0) * l
+        if kid is None:
+            v_super = v_fast
     return {"S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"], "tau_res": s["tau_res"],
             "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])), "L_trans": L_trans,
             "L_fast": L_fast, "v_super": v_super, "daughter": kid}

@@ -1,7 +1,9 @@
 """Study 3 of docs/studies/cracks.md: the supershear transition against Andrews' S.
 
 Each point of ``run/studies/cracks_supershear.toml`` nucleates a crack at a weak patch (the last entry of
-``interface.patch``) in a uniformly prestressed T0 contact.  Its main front is the first front that
+``interface.patch``) in a uniformly prestressed T0 contact: the patch breaks early and the load rises until
+it is the critical crack; ``cracks_supershear_burst.toml`` is the control, a patch that breaks at once at
+the prestress.  The table's ``sweep`` column names the sweep.  Its main front is the first front that
 nucleated in the patch running toward the far edge (+x, the longer side); ``rupture.transition`` gives,
 for it, S as measured (``andrews_s``), Andrews' L_c and L_andrews = f(S) L_c, the measured transition
 distance L_trans (the birth of a daughter ahead of its tip, from its nucleation) and the speed the
@@ -20,8 +22,8 @@ from parslip.plot.figures import pyplot, save
 
 from . import points, sweeps, write
 
-COLS = ["point", "rows", "v0", "patch_delta_b", "patch_width", "S", "tau0_over_taup", "L_c", "L_trans",
-        "L_andrews", "ratio", "L_fast", "reflection", "v_super", "v_super_over_c_s", "band", "main_band"]
+COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "S", "tau0_over_taup", "L_c", "L_trans",
+        "L_andrews", "ratio", "L_fast", "room", "reflection", "v_super", "v_super_over_c_s", "band", "main_band"]
 # The longitudinal wave reflected by the top and bottom rows overtakes a tip running at c_r at
 # 2 h c_r / sqrt(c_l^2 - c_r^2) from nucleation (h the block's height): after it the run is no longer an
 # unbounded body's.
@@ -37,11 +39,11 @@ def main_front(run):
     return min(cand, key=lambda f: f.nucleation_time) if cand else None
 
 
-def _row(row: dict, run) -> dict:
+def _row(sweep: str, row: dict, run) -> dict:
     sc = run.scene if run is not None else {}
     patch = (sc.get("interface.patch") or [{}])[-1]
     l = float(sc.get("lattice.top_cols", math.nan))
-    out = {"point": row["point"], "rows": sc.get("lattice.top_rows"), "v0": sc.get("drive.v0"),
+    out = {"sweep": sweep, "point": row["point"], "rows": sc.get("lattice.top_rows"), "v0": sc.get("drive.v0"),
            "patch_delta_b": patch.get("delta_b"),
            "patch_width": (patch["x"][1] - patch["x"][0]) * l if "x" in patch else math.nan,
            "scene": row["scene"], "commit": row["commit"]}
@@ -49,12 +51,15 @@ def _row(row: dict, run) -> dict:
     if front is None:
         return {**out, **{c: math.nan for c in COLS if c not in out}, "band": None, "main_band": None}
     lo, hi = patch["x"]
-    tr = rupture.transition(run, front, origin=0.5 * (lo + hi), beyond=hi)
+    # how far the front can run: to the first patch beyond this one (the strong far edge), or the edge
+    far = min([p["x"][0] for p in sc["interface.patch"][:-1] if p["x"][0] > hi] + [1.0])
+    room = (far - 0.5 * (lo + hi)) * l
+    tr = rupture.transition(run, front, origin=0.5 * (lo + hi), beyond=hi, before=far)
     waves = wave_speeds(run)
     h = float(sc["lattice.top_rows"]) * ROW_HEIGHT
     return {**out, "S": tr["S"], "tau0_over_taup": tr["tau_0"] / tr["tau_peak"], "L_c": tr["L_c"],
             "L_trans": tr["L_trans"], "L_andrews": tr["L_andrews"], "ratio": tr["L_trans"] / tr["L_andrews"],
-            "L_fast": tr["L_fast"], "reflection": 2 * h / math.sqrt(waves["c_l"] ** 2 - 1.0),
+            "L_fast": tr["L_fast"], "room": room, "reflection": 2 * h / math.sqrt(waves["c_l"] ** 2 - 1.0),
             "v_super": tr["v_super"], "v_super_over_c_s": tr["v_super"] / waves["c_s"],
             "band": band_of(tr["v_super"], waves), "main_band": front.band,
             "_front": front, "_run": run, "_tr": tr}
@@ -68,17 +73,18 @@ def transition_figure(rows, img, source):
     f = rupture.andrews_f(S)
     ax.plot(S, f, "k-", lw=1, label="Andrews (1976), Xia et al. (2004): 9.8 (1.77 - S)$^{-3}$")
     ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
-    for key, m, lab in (("L_trans", "o", "daughter born ahead of the tip"), ("L_fast", "s", "tip first above c_s")):
-        ok = [r for r in rows if np.isfinite(r["S"]) and np.isfinite(r[key])]
-        ax.plot([r["S"] for r in ok], [r[key] / r["L_c"] for r in ok], m, mfc="none" if m == "s" else None,
-                label=f"lattice: {lab}")
-    none = [r for r in rows if np.isfinite(r["S"]) and not np.isfinite(r["L_trans"])]
-    for r in none:
-        ax.annotate("no daughter", (r["S"], r["reflection"] / r["L_c"]), fontsize=6, ha="center")
-        ax.plot(r["S"], r["reflection"] / r["L_c"], "v", color="tab:red")
+    for sweep, c in zip(sorted({r["sweep"] for r in rows}), ("tab:blue", "tab:orange", "tab:green")):
+        mine = [r for r in rows if r["sweep"] == sweep and np.isfinite(r["S"])]
+        for key, m, lab in (("L_trans", "o", "daughter ahead"), ("L_fast", "s", "tip above c_s")):
+            ok = [r for r in mine if np.isfinite(r[key])]
+            ax.plot([r["S"] for r in ok], [r[key] / r["L_c"] for r in ok], m, color=c,
+                    mfc="none" if m == "s" else c, label=f"{sweep}: {lab}")
+        for r in mine:
+            if not (np.isfinite(r["L_trans"]) or np.isfinite(r["L_fast"])):   # none: the room it had, as a bound
+                ax.plot(r["S"], r["room"] / r["L_c"], "^", color=c, mfc="none")
     ax.set_yscale("log")
     ax.set_xlabel("S measured on the run (andrews_s)")
-    ax.set_ylabel("transition distance / L_c")
+    ax.set_ylabel("transition distance / L_c  (^: none within the run's room)")
     ax.legend(fontsize=6)
     ax.set_title("supershear transition on the matched pair, l = 500 a", fontsize=8)
     return save(fig, img, "cracks_supershear_transition", source)
@@ -117,7 +123,7 @@ def tips_figure(rows, img, source):
 def tabulate(runs: str, img: str, tables: str) -> str:
     """cracks_supershear.csv (a row per run, ``COLS`` then scene and commit) and the two figures; returns
     the Markdown table."""
-    rows = [_row(row, run) for d in sweeps(runs, "supershear") for row, run in points(d)]
+    rows = [_row(os.path.basename(d), row, run) for d in sweeps(runs, "supershear") for row, run in points(d)]
     source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
     md = write(rows, COLS, os.path.join(tables, "cracks_supershear.csv"))
     transition_figure(rows, img, source)
