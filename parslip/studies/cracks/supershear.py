@@ -1,9 +1,10 @@
 """Study 3 of docs/studies/cracks.md: the supershear transition against Andrews' S.
 
 Each point of ``run/studies/cracks_supershear.toml`` nucleates a crack at a weak patch (the last entry of
-``interface.patch``) in a uniformly prestressed T0 contact: the patch breaks early and the load rises until
-it is the critical crack; ``cracks_supershear_burst.toml`` is the control, a patch that breaks at once at
-the prestress.  The table's ``sweep`` column names the sweep.  Its main front is the first front that
+``interface.patch``) in a uniformly prestressed T0 contact: the patch breaks at once when the prestress
+reaches its strength; ``cracks_supershear_rest.toml`` is the control, a weaker patch that breaks early,
+meant to grow from rest into the critical crack as the load rises.  The table's ``sweep`` column names the
+sweep.  Its main front is the first front that
 nucleated in the patch running toward the far edge (+x, the longer side); ``rupture.transition`` gives,
 for it, S as measured (``andrews_s``), Andrews' L_c and L_andrews = f(S) L_c, the measured transition
 distance L_trans (the birth of a daughter ahead of its tip, from its nucleation) and the speed the
@@ -30,12 +31,14 @@ COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "S", "ta
 ROW_HEIGHT = math.sqrt(3.0) / 2.0
 
 
-def main_front(run):
+def main_front(run, reach: float = 0.05):
     """The first front nucleated inside the nucleation patch (the scene's last patch, widened by 2 sites)
-    that runs toward +x; None when there is none."""
+    that runs toward +x and gets ``reach`` (l) beyond the patch: the rupture of the contact, not the patch's
+    own early breaks (which stop at its edge); None when there is none."""
     lo, hi = run.scene["interface.patch"][-1]["x"]
     pad = 2.0 / float(run.scene["lattice.top_cols"])
-    cand = [f for f in run.fronts() if f.direction > 0 and lo - pad <= f.nucleation_x <= hi + pad]
+    cand = [f for f in run.fronts() if f.direction > 0 and lo - pad <= f.nucleation_x <= hi + pad
+            and f.x_far >= hi + reach]
     return min(cand, key=lambda f: f.nucleation_time) if cand else None
 
 
@@ -83,6 +86,7 @@ def transition_figure(rows, img, source):
             if not (np.isfinite(r["L_trans"]) or np.isfinite(r["L_fast"])):   # none: the room it had, as a bound
                 ax.plot(r["S"], r["room"] / r["L_c"], "^", color=c, mfc="none")
     ax.set_yscale("log")
+    ax.set_xlim(0.0, 1.6)
     ax.set_xlabel("S measured on the run (andrews_s)")
     ax.set_ylabel("transition distance / L_c  (^: none within the run's room)")
     ax.legend(fontsize=6)
