@@ -164,3 +164,28 @@ def test_transition_of_a_drawn_daughter_against_andrews():
     assert moved["L_trans"] == pytest.approx(20.0) and moved["daughter"] == 1
     late = rupture.transition(run, fr[0], beyond=40.5 / NS)       # a daughter born before x = 40 sites is not one
     assert math.isnan(late["L_trans"]) and late["daughter"] is None
+
+
+def test_transition_where_a_drawn_tip_goes_above_c_s_and_stays():
+    """A crack from site 0 at 1/4 site a frame (1/12 c_r on this record) for 20 sites, then one site a frame
+    (1/3 c_r) to the far edge, with c_s = 0.25 c_r: no daughter, and the tip is above c_s from site 20 on, so
+    L_fast = 20 a on a 60 a contact (within the window's resolution) and the speed it settled at is 1/3 c_r
+    (within 2 %: the fit starts a site early); with c_s = 0.4 c_r it never is."""
+    it = blank(200)
+    draw(it, 10, 0, +1, 4, 2, 0.001, sites=20, crack=True)
+    draw(it, 10 + 4 * 20, 20, +1, 1, 2, 0.001, crack=True)
+    it["sxy"] = np.where(it["intact"] == 0, 0.0, 1.0)
+    scene = {"lattice.top_cols": NS, "interface.kx": 0.1, "material.nu": 0.2, "material.model": "plane_strain",
+             "material.velocity_unit": "c_r", "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
+    for c_s, want in ((0.25, 20.0), (0.4, math.nan)):
+        run = Run.from_arrays(it, scene=scene, attrs={"c_s": c_s, "c_l": 2 * c_s, "c_r": 1.0})
+        (f,) = run.fronts()
+        got = rupture.transition(run, f, min_sites=4)
+        assert got["daughter"] is None and math.isnan(got["L_trans"])
+        if math.isnan(want):
+            assert math.isnan(got["L_fast"]) and math.isnan(got["v_super"])
+        else:        # a window of 4 sites fits above c_s once 3 of them are fast: one site early
+            assert got["L_fast"] == pytest.approx(want, abs=1.0)
+            assert got["v_super"] == pytest.approx((1 / NS) / DT, rel=0.02)
+        wide = rupture.transition(run, f)                 # 20 sites: the window straddles the change longer
+        assert math.isnan(want) or want - 10 <= wide["L_fast"] <= want
