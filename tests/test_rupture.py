@@ -77,6 +77,11 @@ def test_andrews_s_from_the_break_traction_of_a_known_history(sign):
     assert got["peak_from"] == "events" and got["S"] == pytest.approx(2.0, rel=0.02)
     assert (got["tau_0"], got["tau_peak"], got["tau_res"]) == (pytest.approx(1.0), pytest.approx(3.0), 0.0)
     assert np.nanmedian(got["sites"]["S"]) == pytest.approx(2.0, rel=0.02) and f.andrews_s == got["S"]
+    it["sxy"][:15] *= 0.5                                  # tau_0 = 0.5 until frame 15: S = (3 - 0.5)/0.5
+    (f,) = Run.from_arrays(it).fronts()
+    assert rupture.andrews_s(f.run, f)["S"] == pytest.approx(2.0, rel=0.02)
+    assert rupture.andrews_s(f.run, f, t0=10 * DT)["S"] == pytest.approx(5.0, rel=0.02)
+    it["sxy"][:15] *= 2.0
     del it["events"]["traction"]
     (f,) = Run.from_arrays(it).fronts()
     got = rupture.andrews_s(f.run, f)

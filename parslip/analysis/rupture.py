@@ -56,12 +56,13 @@ def _break_tractions(run, front: Front) -> np.ndarray | None:
     return np.array([at.get((int(k), int(st)), math.nan) for k, st in zip(front.tip["step"], sites)])
 
 
-def andrews_s(run, front: Front, window: float = RES_WINDOW) -> dict:
+def andrews_s(run, front: Front, window: float = RES_WINDOW, t0: float | None = None) -> dict:
     """Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res), per site along the front's path,
     then summarised; tractions are the interface shear traction sxy (rho c_r^2).  Per site s the tip reached:
 
       tau_0     the traction the front runs into: s's traction in the last frame before the front's first
-                break shows (the frame before its nucleation)
+                break shows (the frame before its nucleation), or before time ``t0`` (l/c_r) when given: a
+                front that sat at a patch while the load rose ran into the traction of when it left
       tau_peak  s's traction at the step its bond broke, from the event record (``traction``); a file
                 without it falls back on the frames, the largest traction s showed from tau_0's frame to
                 the last frame before its break (which may miss the peak: ``peak_from`` says "frames")
@@ -81,7 +82,7 @@ def andrews_s(run, front: Front, window: float = RES_WINDOW) -> dict:
     sxy = np.asarray(iface["sxy"], float) * (np.asarray(iface["intact"]) != 0)    # a broken bond carries 0
     t, sites = np.asarray(iface["t"], float), _sites(iface, front)
     frames = np.clip(np.asarray(front.tip["frame"], int), 0, len(t) - 1)
-    k0 = max(int(frames[0]) - 1, 0)
+    k0 = max(int(frames[0]) - 1, 0) if t0 is None else max(int(np.searchsorted(t, t0)) - 1, 0)
     peak = _break_tractions(run, front)
     peak_from = "events" if peak is not None else "frames"
     if peak is None:                      # the frames' extreme before the break, in the direction of the load
@@ -202,7 +203,9 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
     none) counts: the breaks of a nucleation patch, nearly simultaneous, are no transition, nor is a front
     born at a free edge or a barrier the study does not look at.
 
-      S, tau_0, tau_peak, tau_res   ``andrews_s`` of the front (medians over its path, rho c_r^2)
+      S, tau_0, tau_peak, tau_res   ``andrews_s`` of the front (medians over its path, rho c_r^2), tau_0
+                   read before the tip first passed ``beyond`` when that is given ("launch", l/c_r): a
+                   front that sat at its patch while the load rose ran into the prestress of when it left
       d_c          the bond's slip at its break, D_c = x_b = tau_peak a / k_x (the sites' median k_x; a bond
                    whose rest offset is 0 holds k_x x / a up to its break)
       L_c          ``andrews_lc`` with the block's M (the Born continuum's static mode II modulus)
@@ -217,7 +220,12 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
       daughter     the daughter's catalogue index, or None."""
     l = float(run.scene["lattice.top_cols"])
     M, unit = _modulus_and_stress_unit(run)
-    s = andrews_s(run, front)
+    x0 = front.nucleation_x if origin is None else origin
+    edge = x0 if beyond is None else beyond
+    d = front.direction or 1
+    gone = (np.asarray(front.tip["x"], float) - edge) * d > 0          # the tip beyond ``beyond``
+    launch = float(np.asarray(front.tip["t"], float)[gone].min()) if beyond is not None and gone.any() else None
+    s = andrews_s(run, front, t0=launch)
     kx = float(np.median(run.interface["kx"])) if "kx" in run.interface else float(run.scene["interface.kx"])
     tp, t0, tr = (s[k] * unit for k in ("tau_peak", "tau_0", "tau_res"))
     d_c = tp / kx
@@ -225,9 +233,6 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
     fronts = run.fronts(**kw)
     me = next((i for i, f in enumerate(fronts) if f is front or (f.nucleation_time == front.nucleation_time
                and f.nucleation_x == front.nucleation_x)), None)
-    x0 = front.nucleation_x if origin is None else origin
-    edge = x0 if beyond is None else beyond
-    d = front.direction or 1
 
     def past(x: float) -> bool:
         return (x - edge) * d > 0 and (before is None or (before - x) * d > 0)
@@ -242,7 +247,7 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
         L_fast = abs(L_fast - x0) * l
         if kid is None:
             v_super = v_fast
-    return {"S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"], "tau_res": s["tau_res"],
+    return {"launch": launch, "S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"], "tau_res": s["tau_res"],
             "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])), "L_trans": L_trans,
             "L_fast": L_fast, "v_super": v_super, "daughter": kid}
 

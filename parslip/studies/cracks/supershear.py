@@ -23,8 +23,8 @@ from parslip.plot.figures import pyplot, save
 
 from . import points, sweeps, write
 
-COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "S", "tau0_over_taup", "L_c", "L_trans",
-        "L_andrews", "ratio", "L_fast", "room", "reflection", "v_super", "v_super_over_c_s", "band", "main_band"]
+COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "launch", "S", "tau0_over_taup", "L_c", "L_trans",
+        "L_andrews", "ratio", "trans_by", "L_daughter", "L_fast", "room", "reflection", "v_super", "v_super_over_c_s", "band", "main_band"]
 # The longitudinal wave reflected by the top and bottom rows overtakes a tip running at c_r at
 # 2 h c_r / sqrt(c_l^2 - c_r^2) from nucleation (h the block's height): after it the run is no longer an
 # unbounded body's.
@@ -52,7 +52,8 @@ def _row(sweep: str, row: dict, run) -> dict:
            "scene": row["scene"], "commit": row["commit"]}
     front = main_front(run) if run is not None else None
     if front is None:
-        return {**out, **{c: math.nan for c in COLS if c not in out}, "band": None, "main_band": None}
+        return {**out, **{c: math.nan for c in COLS if c not in out}, "band": None, "main_band": None,
+                "trans_by": None}
     lo, hi = patch["x"]
     # how far the front can run: to the first patch beyond this one (the strong far edge), or the edge
     far = min([p["x"][0] for p in sc["interface.patch"][:-1] if p["x"][0] > hi] + [1.0])
@@ -60,9 +61,15 @@ def _row(sweep: str, row: dict, run) -> dict:
     tr = rupture.transition(run, front, origin=0.5 * (lo + hi), beyond=hi, before=far)
     waves = wave_speeds(run)
     h = float(sc["lattice.top_rows"]) * ROW_HEIGHT
-    return {**out, "S": tr["S"], "tau0_over_taup": tr["tau_0"] / tr["tau_peak"], "L_c": tr["L_c"],
-            "L_trans": tr["L_trans"], "L_andrews": tr["L_andrews"], "ratio": tr["L_trans"] / tr["L_andrews"],
-            "L_fast": tr["L_fast"], "room": room, "reflection": 2 * h / math.sqrt(waves["c_l"] ** 2 - 1.0),
+    # The transition distance: a daughter's birth when the catalogue separates one from the main front, else
+    # where the main front's own tip went above c_s and stayed (a daughter born a few sites ahead merges
+    # into it; the catalogue then holds one front).
+    by = "daughter" if math.isfinite(tr["L_trans"]) else ("tip above c_s" if math.isfinite(tr["L_fast"]) else None)
+    L = tr["L_trans"] if by == "daughter" else tr["L_fast"]
+    return {**out, "launch": tr["launch"], "S": tr["S"], "tau0_over_taup": tr["tau_0"] / tr["tau_peak"], "L_c": tr["L_c"],
+            "L_trans": L, "L_andrews": tr["L_andrews"], "ratio": L / tr["L_andrews"], "trans_by": by,
+            "L_daughter": tr["L_trans"], "L_fast": tr["L_fast"], "room": room,
+            "reflection": 2 * h / math.sqrt(waves["c_l"] ** 2 - 1.0),
             "v_super": tr["v_super"], "v_super_over_c_s": tr["v_super"] / waves["c_s"],
             "band": band_of(tr["v_super"], waves), "main_band": front.band,
             "_front": front, "_run": run, "_tr": tr}
@@ -78,12 +85,13 @@ def transition_figure(rows, img, source):
     ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
     for sweep, c in zip(sorted({r["sweep"] for r in rows}), ("tab:blue", "tab:orange", "tab:green")):
         mine = [r for r in rows if r["sweep"] == sweep and np.isfinite(r["S"])]
-        for key, m, lab in (("L_trans", "o", "daughter ahead"), ("L_fast", "s", "tip above c_s")):
-            ok = [r for r in mine if np.isfinite(r[key])]
-            ax.plot([r["S"] for r in ok], [r[key] / r["L_c"] for r in ok], m, color=c,
-                    mfc="none" if m == "s" else c, label=f"{sweep}: {lab}")
+        for by, m in (("daughter", "o"), ("tip above c_s", "s")):
+            ok = [r for r in mine if r["trans_by"] == by]
+            if ok:
+                ax.plot([r["S"] for r in ok], [r["L_trans"] / r["L_c"] for r in ok], m, color=c,
+                        mfc="none" if m == "s" else c, label=f"{sweep}: {by}")
         for r in mine:
-            if not (np.isfinite(r["L_trans"]) or np.isfinite(r["L_fast"])):   # none: the room it had, as a bound
+            if r["trans_by"] is None:       # no transition: the room it had, as a lower bound
                 ax.plot(r["S"], r["room"] / r["L_c"], "^", color=c, mfc="none")
     ax.set_yscale("log")
     ax.set_xlim(0.0, 1.6)
