@@ -79,7 +79,7 @@ def transition_figure(rows, img, source):
     """L_trans / L_c against S, beside Andrews' 9.8 (1.77 - S)^-3 and its factor-1.5 band."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 4))
-    S = np.linspace(0.0, 1.3, 200)
+    S = np.linspace(0.0, 1.72, 300)
     f = rupture.andrews_f(S)
     ax.plot(S, f, "k-", lw=1, label="Andrews (1976), Xia et al. (2004): 9.8 (1.77 - S)$^{-3}$")
     ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
@@ -94,11 +94,17 @@ def transition_figure(rows, img, source):
             if r["trans_by"] is None:       # no transition: the room it had, as a lower bound
                 ax.plot(r["S"], r["room"] / r["L_c"], "^", color=c, mfc="none")
     ax.set_yscale("log")
-    ax.set_xlim(0.0, 1.6)
+    ax.axvline(rupture.ANDREWS_S_2D, color="k", ls=":", lw=0.8)
+    ax.text(rupture.ANDREWS_S_2D, 1.5, " S = 1.77: no transition (2D)", fontsize=6, rotation=90, va="bottom")
+    for r in rows:                    # the nucleation patch's edge: no transition can be measured nearer
+        if np.isfinite(r["S"]) and np.isfinite(r["L_c"]):
+            ax.plot(r["S"], 0.5 * r["patch_width"] / r["L_c"], "_", color="0.3", ms=8)
+    ax.set_xlim(0.0, 2.7)
     ax.set_xlabel("S measured on the run (andrews_s)")
-    ax.set_ylabel("transition distance / L_c  (^: none within the run's room)")
+    ax.set_ylabel("transition distance / L_c")
     ax.legend(fontsize=6)
-    ax.set_title("supershear transition on the matched pair, l = 500 a", fontsize=8)
+    ax.set_title("supershear transition on the matched pair, l = 500 a\n"
+                 "-: the patch's edge; ^: no transition within the run's room", fontsize=7)
     return save(fig, img, "cracks_supershear_transition", source)
 
 
@@ -109,7 +115,7 @@ def tips_figure(rows, img, source):
     fig, ax = plt.subplots(figsize=(5.5, 4))
     waves = None
     for i, r in enumerate(rows):
-        if "_front" not in r:
+        if "_front" not in r or r["sweep"] != "cracks_supershear":
             continue
         run, f, tr = r["_run"], r["_front"], r["_tr"]
         waves = waves or wave_speeds(run)
@@ -125,10 +131,10 @@ def tips_figure(rows, img, source):
         t = np.array([0.0, 250.0])
         for key, ls in (("c_s", "--"), ("c_l", "-.")):
             ax.plot(t, waves[key] * t, ls, color="0.5", lw=0.8, label=f"{key} = {waves[key]:.3g} c_r")
-    ax.set_xlabel("time since nucleation (a / c_r)")
-    ax.set_ylabel("tip's distance from nucleation (a)")
+    ax.set_xlabel("time since its first break (a / c_r)")
+    ax.set_ylabel("tip's distance from its first break (a)")
     ax.legend(fontsize=6)
-    ax.set_title("main fronts (solid) and daughters (dotted)", fontsize=8)
+    ax.set_title("cracks_supershear: main fronts (solid) and daughters (dotted)", fontsize=8)
     return save(fig, img, "cracks_supershear_tips", source)
 
 
