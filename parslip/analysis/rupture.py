@@ -178,14 +178,16 @@ def _first_supershear(front: Front, keep, c_s: float, n: int) -> tuple[float, fl
     """(x (l) of the first site from which the tip's arrivals over ``n`` consecutive sites, among the sites
     ``keep(x)`` holds, fit a speed above ``c_s`` and those of every kept site from there on too; that last
     speed, c_r); NaNs when there is no such site: a tip that ran at c_R (5 % below c_s in the lattice) with
-    a window's jitter above c_s did not go supershear.  A straight-line fit over n sites, not the catalogue's local fits: a burst of
-    near-simultaneous breaks inside the window does not hide the speed the tip keeps."""
+    a window's jitter above c_s did not go supershear.  A straight-line fit over n sites, not the
+    catalogue's local fits: a burst of near-simultaneous breaks inside the window does not hide the speed
+    the tip keeps."""
     x, t = np.asarray(front.tip["x"], float), np.asarray(front.tip["t"], float)
     ok = np.array([keep(v) for v in x], bool)
     x, t = x[ok], t[ok]
     order = np.argsort(t, kind="stable")
     x, t = x[order], t[order]
     d = front.direction or 1
+
     def speed(a: int, b: int) -> float:
         return d * np.polyfit(t[a:b], x[a:b], 1)[0] if np.ptp(t[a:b]) > 0 else math.nan
     for i in range(len(x) - n + 1):
@@ -213,8 +215,8 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
       L_trans      the distance from the origin to the birth of the first daughter born ahead of its tip
                    (``daughters``) beyond ``beyond``, NaN when none was
       L_fast       the distance from the origin to the first site (beyond ``beyond``) from which the tip ran
-                   above c_s over ``min_sites`` sites (a line fitted through their arrivals), NaN when it never did
-                   (speeds in c_r; the run's c_s, ``fronts.wave_speeds``)
+                   above c_s over ``min_sites`` sites (a line fitted through their arrivals), NaN when it
+                   never did (speeds in c_r; the run's c_s, ``fronts.wave_speeds``)
       v_super      the speed the supershear front settled at: the daughter's steady speed (over the middle
                    60 % of its sites) when there is one, else the mother's, fitted from L_fast on
       daughter     the daughter's catalogue index, or None."""
@@ -236,7 +238,8 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
 
     def past(x: float) -> bool:
         return (x - edge) * d > 0 and (before is None or (before - x) * d > 0)
-    kids = sorted((k for k in daughters(run, **kw) if k["mother"] == me and past(k["x"])), key=lambda k: k["t"])
+    kids = sorted((k for k in daughters(run, **kw) if k["mother"] == me and past(k["x"])),
+                  key=lambda k: k["t"])
     L_trans, v_super, kid = math.nan, math.nan, None
     if kids:
         kid = kids[0]["daughter"]
@@ -247,9 +250,9 @@ def transition(run, front: Front, origin: float | None = None, beyond: float | N
         L_fast = abs(L_fast - x0) * l
         if kid is None:
             v_super = v_fast
-    return {"launch": launch, "S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"], "tau_res": s["tau_res"],
-            "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])), "L_trans": L_trans,
-            "L_fast": L_fast, "v_super": v_super, "daughter": kid}
+    return {"launch": launch, "S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"],
+            "tau_res": s["tau_res"], "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])),
+            "L_trans": L_trans, "L_fast": L_fast, "v_super": v_super, "daughter": kid}
 
 
 def speed_summary(run, **kw) -> dict:

@@ -23,8 +23,8 @@ from parslip.plot.figures import pyplot, save
 
 from . import points, sweeps, write
 
-COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "launch", "S", "tau0_over_taup", "L_c", "L_trans",
-        "L_andrews", "ratio", "trans_by", "L_daughter", "L_fast", "room", "reflection", "v_super",
+COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "launch", "S", "tau0_over_taup", "L_c",
+        "L_trans", "L_andrews", "ratio", "trans_by", "L_daughter", "L_fast", "room", "reflection", "v_super",
         "v_super_over_c_s", "band", "main_band", "bottom_kn", "damping", "zeta"]
 # The longitudinal wave reflected by the top and bottom rows overtakes a tip running at c_r at
 # 2 h c_r / sqrt(c_l^2 - c_r^2) from nucleation (h the block's height): after it the run is no longer an
@@ -50,7 +50,8 @@ def _row(sweep: str, row: dict, run) -> dict:
     out = {"sweep": sweep, "point": row["point"], "rows": sc.get("lattice.top_rows"), "v0": sc.get("drive.v0"),
            "patch_delta_b": patch.get("delta_b"),
            "patch_width": (patch["x"][1] - patch["x"][0]) * l if "x" in patch else math.nan,
-           "bottom_kn": sc.get("material.bottom_kn"), "damping": sc.get("time.damping"), "zeta": sc.get("time.zeta"),
+           "bottom_kn": sc.get("material.bottom_kn"), "damping": sc.get("time.damping"),
+           "zeta": sc.get("time.zeta"),
            "scene": row["scene"], "commit": row["commit"]}
     front = main_front(run) if run is not None else None
     if front is None:
@@ -68,7 +69,8 @@ def _row(sweep: str, row: dict, run) -> dict:
     # into it; the catalogue then holds one front).
     by = "daughter" if math.isfinite(tr["L_trans"]) else ("tip above c_s" if math.isfinite(tr["L_fast"]) else None)
     L = tr["L_trans"] if by == "daughter" else tr["L_fast"]
-    return {**out, "launch": tr["launch"], "S": tr["S"], "tau0_over_taup": tr["tau_0"] / tr["tau_peak"], "L_c": tr["L_c"],
+    return {**out, "launch": tr["launch"], "S": tr["S"], "tau0_over_taup": tr["tau_0"] / tr["tau_peak"],
+            "L_c": tr["L_c"],
             "L_trans": L, "L_andrews": tr["L_andrews"], "ratio": L / tr["L_andrews"], "trans_by": by,
             "L_daughter": tr["L_trans"], "L_fast": tr["L_fast"], "room": room,
             "reflection": 2 * h / math.sqrt(waves["c_l"] ** 2 - 1.0),
