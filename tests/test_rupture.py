@@ -77,6 +77,11 @@ def test_andrews_s_from_the_break_traction_of_a_known_history(sign):
     assert got["peak_from"] == "events" and got["S"] == pytest.approx(2.0, rel=0.02)
     assert (got["tau_0"], got["tau_peak"], got["tau_res"]) == (pytest.approx(1.0), pytest.approx(3.0), 0.0)
     assert np.nanmedian(got["sites"]["S"]) == pytest.approx(2.0, rel=0.02) and f.andrews_s == got["S"]
+    it["sxy"][:15] *= 0.5                                  # tau_0 = 0.5 until frame 15: S = (3 - 0.5)/0.5
+    (f,) = Run.from_arrays(it).fronts()
+    assert rupture.andrews_s(f.run, f)["S"] == pytest.approx(2.0, rel=0.02)
+    assert rupture.andrews_s(f.run, f, t0=10 * DT)["S"] == pytest.approx(5.0, rel=0.02)
+    it["sxy"][:15] *= 2.0
     del it["events"]["traction"]
     (f,) = Run.from_arrays(it).fronts()
     got = rupture.andrews_s(f.run, f)
@@ -113,3 +118,80 @@ def test_traction_drop_of_a_known_traction_history():
     assert FIELDS["traction_drop"].units == "rho c_r^2" and "dtau" in table([f])
     it.pop("sxy")
     assert Run.from_arrays(it).fronts()[0].traction_drop is None
+
+
+def test_andrews_lc_is_xia_et_al_form_for_the_central_force_lattice():
+    """With k_t = 0 the Born continuum is isotropic with plane-stress nu = 1/3 and mu = (sqrt 3 / 4) k_n, so
+    the static mode II modulus of ``cracks.mode2_compliance`` makes ``andrews_lc`` Xia et al.'s (Science
+    2004) L_c = (1 + nu)/pi mu (tau_p - tau_r) D_c / (tau_0 - tau_r)^2; f(S) = 9.8 (1.77 - S)^-3, none
+    from S = 1.77 up."""
+    from parslip.analysis.cracks import mode2_compliance
+    kn = 2.7
+    M = 1.0 / mode2_compliance(0.0, kn, 0.0)
+    mu, nu = math.sqrt(3) / 4 * kn, 1.0 / 3.0
+    tau_p, tau_0, tau_r, d_c = 0.05, 0.031, 0.004, 0.42
+    xia = (1 + nu) / math.pi * mu * (tau_p - tau_r) * d_c / (tau_0 - tau_r) ** 2
+    # H(0) is taken at v = 1e-3 c: 1e-6 off the static value
+    assert rupture.andrews_lc(M, tau_p, tau_0, tau_r, d_c) == pytest.approx(xia, rel=1e-5)
+    assert rupture.andrews_f(0.77) == pytest.approx(9.8) and math.isnan(rupture.andrews_f(1.77))
+    assert rupture.andrews_f(0.3) == pytest.approx(9.8 / 1.47 ** 3)
+
+
+def test_transition_of_a_drawn_daughter_against_andrews():
+    """The daughter record of the first test, as cracks, with tractions: tau_0 = 1 before the fronts, 2 at each break
+    (S = (2 - 1)/(1 - 0) = 1), on a 60-site contact of 60 a.  The daughter is born 30 sites from the mother's
+    first site: L_trans = 30 a (20 a from an origin at site 10; none when only what is beyond site 40 counts);
+    L_andrews = f(1) L_c with L_c computed here from the block's modulus."""
+    from parslip.analysis.cracks import mode2_compliance
+    from parslip.model.physics import DENSITY, Material
+    it = blank(4 * NS + 40)
+    draw(it, 10, 0, +1, 4, 2, 0.001, crack=True)
+    draw(it, 30, 30, +1, 1, 2, 0.001, crack=True)         # the daughter runs to the far edge
+    nf = len(it["t"])
+    broken = it["intact"] == 0
+    it["sxy"] = np.where(broken, 0.0, 1.0)
+    it["step"] = np.arange(nf)
+    k, site = np.nonzero(broken[1:] != broken[:-1])
+    kind = np.where(broken[k + 1, site], EVENT_BREAK, EVENT_FORM).astype(np.uint8)
+    it["events"] = {"step": k, "time": k * DT, "site": site, "kind": kind, "partner": site, "site_column0": 0,
+                    "dt": DT, "c_s": math.inf, "c_l": math.inf, "traction": np.where(kind == EVENT_BREAK, 2.0, 0.0)}
+    scene = {"lattice.top_cols": NS, "interface.kx": 0.1, "material.nu": 0.2, "material.model": "plane_strain",
+             "material.velocity_unit": "c_r", "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
+    run = Run.from_arrays(it, scene=scene)
+    fr = run.fronts()
+    got = rupture.transition(run, fr[0])
+    m = Material.from_scene(0.2, "plane_strain", "c_r", 2.81154, 0.133883, "along")
+    unit = DENSITY * m.c_r ** 2
+    L_c = (2.0 * unit) * (2.0 * unit / 0.1) / (math.pi * mode2_compliance(0.0, m.kn_top, m.kt_top) * unit ** 2)
+    assert got["S"] == pytest.approx(1.0) and got["L_trans"] == pytest.approx(30.0)
+    assert got["L_c"] == pytest.approx(L_c, rel=1e-9) and got["L_andrews"] == pytest.approx(9.8 / 0.77 ** 3 * L_c)
+    assert got["daughter"] == 1 and got["v_super"] == pytest.approx((1 / NS) / DT, rel=1e-6)
+    moved = rupture.transition(run, fr[0], origin=10.5 / NS)     # counted from site 10: 20 sites to the daughter
+    assert moved["L_trans"] == pytest.approx(20.0) and moved["daughter"] == 1
+    late = rupture.transition(run, fr[0], beyond=40.5 / NS)       # a daughter born before x = 40 sites is not one
+    assert math.isnan(late["L_trans"]) and late["daughter"] is None
+
+
+def test_transition_where_a_drawn_tip_goes_above_c_s_and_stays():
+    """A crack from site 0 at 1/4 site a frame (1/12 c_r on this record) for 20 sites, then one site a frame
+    (1/3 c_r) to the far edge, with c_s = 0.25 c_r: no daughter, and the tip is above c_s from site 20 on, so
+    L_fast = 20 a on a 60 a contact (within the window's resolution) and the speed it settled at is 1/3 c_r
+    (within 2 %: the fit starts a site early); with c_s = 0.4 c_r it never is."""
+    it = blank(200)
+    draw(it, 10, 0, +1, 4, 2, 0.001, sites=20, crack=True)
+    draw(it, 10 + 4 * 20, 20, +1, 1, 2, 0.001, crack=True)
+    it["sxy"] = np.where(it["intact"] == 0, 0.0, 1.0)
+    scene = {"lattice.top_cols": NS, "interface.kx": 0.1, "material.nu": 0.2, "material.model": "plane_strain",
+             "material.velocity_unit": "c_r", "material.bottom_kn": 2.81154, "material.bottom_kt": 0.133883}
+    for c_s, want in ((0.25, 20.0), (0.4, math.nan)):
+        run = Run.from_arrays(it, scene=scene, attrs={"c_s": c_s, "c_l": 2 * c_s, "c_r": 1.0})
+        (f,) = run.fronts()
+        got = rupture.transition(run, f, min_sites=4)
+        assert got["daughter"] is None and math.isnan(got["L_trans"])
+        if math.isnan(want):
+            assert math.isnan(got["L_fast"]) and math.isnan(got["v_super"])
+        else:        # a window of 4 sites fits above c_s once 3 of them are fast: one site early
+            assert got["L_fast"] == pytest.approx(want, abs=1.0)
+            assert got["v_super"] == pytest.approx((1 / NS) / DT, rel=0.02)
+        wide = rupture.transition(run, f)                 # 20 sites: the window straddles the change longer
+        assert math.isnan(want) or want - 10 <= wide["L_fast"] <= want

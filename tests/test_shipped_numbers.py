@@ -65,24 +65,24 @@ def test_a_table_records_its_scene_and_commit_under_todays_readings(path):
     assert not _departures(scenes, varied), f"{path}: computed under other readings: {_departures(scenes, varied)}"
 
 
-def _table_names(path) -> set:
-    """The keys named by the columns of the table a figure goes with (``<table>_<name>.png`` beside
-    ``<table>.csv``), as the table's own check reads them: a reading the table names is a choice of the study
-    (the crack studies' substrate of the block's own k_n), in its figures as in its rows."""
-    for t in TABLES:
-        if path.name.startswith(t.stem + "_"):
-            cols = set(next(csv.reader(t.open())))
-            return cols | {k for k in READINGS if k.rsplit(".", 1)[-1] in cols}
-    return set()
-
-
 @pytest.mark.parametrize("path", FIGURES, ids=lambda p: str(p.relative_to(DOCS)))
 def test_a_figure_records_its_scene_and_commit_under_todays_readings(path):
     p = read_png(path)
     assert p["commit"] and p["scenes"], f"{path}: no parslip:commit / parslip:scene (plot.provenance)"
     assert "unknown" not in p["commit"], path
-    bad = _departures(p["scenes"], _varied(p["scenes"]) | _table_names(path))
+    bad = _departures(p["scenes"], _varied(p["scenes"]) | _table_readings(path))
     assert not bad, f"{path}: drawn from runs under other readings: {bad}"
+
+
+def _table_readings(figure) -> set:
+    """The readings a figure's study table names as columns (by key's last part): a figure img/<stem>_*.png
+    draws the runs of the table <stem>.csv beside its img folder, which declares them."""
+    keys = set()
+    for table in TABLES:
+        if table.parent == figure.parent.parent and figure.stem.startswith(table.stem + "_"):
+            cols = set(next(csv.reader(table.open())))
+            keys |= {k for k in READINGS if k in cols or k.rsplit(".", 1)[-1] in cols}
+    return keys
 
 
 def test_the_check_fails_on_a_table_under_an_old_reading(tmp_path):

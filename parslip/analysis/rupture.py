@@ -6,6 +6,11 @@ andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / 
                                 along the front's path, and its median (the 2D supershear threshold is
                                 S ~ 1.77); the per-front field ``andrews_s`` is that median
 daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
+andrews_lc, andrews_f           Andrews' (1976) critical half-length L_c and his transition factor f(S) as Xia
+                                et al. (Science 2004) fit it: L_trans = f(S) L_c
+transition(run, front)          where a front went supershear: the distance from its nucleation at which a
+                                daughter was born ahead of it (or its tip first ran above c_s), Andrews'
+                                L_trans for the S measured on it, and the speed the supershear front settled at
 speed_summary(run)              the largest local speed fitted over the catalogue's window, and how many
                                 sites ran above c_s or broke in bursts
 through_patch(front, lo, hi)    how a front met a patch [lo, hi) of the contact: its mean speed before,
@@ -21,7 +26,8 @@ import math
 import numpy as np
 
 from ..io.contract import EVENT_BREAK
-from .fronts import Front, front_field
+from ..model.physics import DENSITY
+from .fronts import Front, front_field, wave_speeds
 
 # S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
 # 1.77 (tau_0 - tau_res).
@@ -50,12 +56,13 @@ def _break_tractions(run, front: Front) -> np.ndarray | None:
     return np.array([at.get((int(k), int(st)), math.nan) for k, st in zip(front.tip["step"], sites)])
 
 
-def andrews_s(run, front: Front, window: float = RES_WINDOW) -> dict:
+def andrews_s(run, front: Front, window: float = RES_WINDOW, t0: float | None = None) -> dict:
     """Andrews' seismic ratio S = (tau_peak - tau_0) / (tau_0 - tau_res), per site along the front's path,
     then summarised; tractions are the interface shear traction sxy (rho c_r^2).  Per site s the tip reached:
 
       tau_0     the traction the front runs into: s's traction in the last frame before the front's first
-                break shows (the frame before its nucleation)
+                break shows (the frame before its nucleation), or before time ``t0`` (l/c_r) when given: a
+                front that sat at a patch while the load rose ran into the traction of when it left
       tau_peak  s's traction at the step its bond broke, from the event record (``traction``); a file
                 without it falls back on the frames, the largest traction s showed from tau_0's frame to
                 the last frame before its break (which may miss the peak: ``peak_from`` says "frames")
@@ -75,7 +82,7 @@ def andrews_s(run, front: Front, window: float = RES_WINDOW) -> dict:
     sxy = np.asarray(iface["sxy"], float) * (np.asarray(iface["intact"]) != 0)    # a broken bond carries 0
     t, sites = np.asarray(iface["t"], float), _sites(iface, front)
     frames = np.clip(np.asarray(front.tip["frame"], int), 0, len(t) - 1)
-    k0 = max(int(frames[0]) - 1, 0)
+    k0 = max(int(frames[0]) - 1, 0) if t0 is None else max(int(np.searchsorted(t, t0)) - 1, 0)
     peak = _break_tractions(run, front)
     peak_from = "events" if peak is not None else "frames"
     if peak is None:                      # the frames' extreme before the break, in the direction of the load
@@ -124,6 +131,128 @@ def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
                 out.append({"mother": i, "daughter": j, "t": d.nucleation_time, "x": d.nucleation_x,
                             "ahead": float(ahead)})
     return out
+
+
+# Xia, Rosakis & Kanamori (Science 2004): their fit to Andrews' (1976) transition lengths of a 2D slip-weakening
+# crack, L_trans / L_c = 9.8 (1.77 - S)^-3.
+ANDREWS_F_COEF = 9.8
+
+
+def andrews_f(S):
+    """Andrews' transition factor f(S) = L_trans / L_c = 9.8 (1.77 - S)^-3 (Xia et al. 2004's fit to Andrews
+    1976, Fig. 6); NaN from S = 1.77 up (no transition in 2D) and for NaN."""
+    S = np.asarray(S, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(S < ANDREWS_S_2D, ANDREWS_F_COEF / (ANDREWS_S_2D - S) ** 3, math.nan)
+
+
+def andrews_lc(modulus: float, tau_p, tau_0, tau_res, d_c):
+    """Andrews' (1976) critical half-length of a mode II slip-weakening crack (units of d_c):
+
+        L_c = M (tau_p - tau_res) D_c / (pi (tau_0 - tau_res)^2)
+
+    the Griffith half-length of a crack under the stress drop tau_0 - tau_res (K_II = (tau_0 - tau_res)
+    sqrt(pi L), G = K_II^2 / (2 M)) whose fracture energy is that of the linear slip-weakening law,
+    Gamma = (tau_p - tau_res) D_c / 2.  M is the static mode II modulus, G = K^2 / (2 M): mu / (1 - nu) in
+    plane strain, mu (1 + nu) in plane stress, which is Xia et al.'s (1 + nu) / pi form; for the Born lattice
+    ``cracks.mode2_compliance`` gives 1 / M.  Tractions and M in one unit (stress), d_c a length."""
+    drop = np.asarray(tau_0, float) - np.asarray(tau_res, float)
+    return modulus * (np.asarray(tau_p, float) - np.asarray(tau_res, float)) * np.asarray(d_c, float) / \
+        (math.pi * drop * drop)
+
+
+def _modulus_and_stress_unit(run) -> tuple[float, float]:
+    """The block's static mode II modulus M = 1 / H(0) (internal stress units, m c^2 / a^2) and the internal
+    stress of one rho c_r^2 (the unit of ``/interface/sxy``)."""
+    from .cracks import _material, mode2_compliance
+    m = _material(run)
+    return 1.0 / mode2_compliance(0.0, m.kn_top, m.kt_top), DENSITY * m.c_r * m.c_r
+
+
+# Sites over which the tip must run above c_s for its transition: about a process zone (Lambda = 17 a at
+# k_x = 0.1); over 10 sites the arrivals' jitter alone lifts a tip at c_R above c_s.
+MIN_SUPERSHEAR_SITES = 20
+
+
+def _first_supershear(front: Front, keep, c_s: float, n: int) -> tuple[float, float]:
+    """(x (l) of the first site from which the tip's arrivals over ``n`` consecutive sites, among the sites
+    ``keep(x)`` holds, fit a speed above ``c_s`` and those of every kept site from there on too; that last
+    speed, c_r); NaNs when there is no such site: a tip that ran at c_R (5 % below c_s in the lattice) with
+    a window's jitter above c_s did not go supershear.  A straight-line fit over n sites, not the
+    catalogue's local fits: a burst of near-simultaneous breaks inside the window does not hide the speed
+    the tip keeps."""
+    x, t = np.asarray(front.tip["x"], float), np.asarray(front.tip["t"], float)
+    ok = np.array([keep(v) for v in x], bool)
+    x, t = x[ok], t[ok]
+    order = np.argsort(t, kind="stable")
+    x, t = x[order], t[order]
+    d = front.direction or 1
+
+    def speed(a: int, b: int) -> float:
+        return d * np.polyfit(t[a:b], x[a:b], 1)[0] if np.ptp(t[a:b]) > 0 else math.nan
+    for i in range(len(x) - n + 1):
+        if speed(i, i + n) > c_s and speed(i, len(x)) > c_s:
+            return float(x[i]), float(speed(i, len(x)))
+    return math.nan, math.nan
+
+
+def transition(run, front: Front, origin: float | None = None, beyond: float | None = None,
+               before: float | None = None, min_sites: int = MIN_SUPERSHEAR_SITES, **kw) -> dict:
+    """Where ``front`` went supershear, against Andrews' curve.  Lengths in a, speeds in c_r.  Distances are
+    counted from ``origin`` (x/l; default the front's nucleation, its first break: give the centre of a
+    nucleation patch, Andrews' hypocentre, when the patch breaks at once), and only what happens beyond
+    ``beyond`` (x/l, in the front's direction; default the origin) and short of ``before`` (x/l; default
+    none) counts: the breaks of a nucleation patch, nearly simultaneous, are no transition, nor is a front
+    born at a free edge or a barrier the study does not look at.
+
+      S, tau_0, tau_peak, tau_res   ``andrews_s`` of the front (medians over its path, rho c_r^2), tau_0
+                   read before the tip first passed ``beyond`` when that is given ("launch", l/c_r): a
+                   front that sat at its patch while the load rose ran into the prestress of when it left
+      d_c          the bond's slip at its break, D_c = x_b = tau_peak a / k_x (the sites' median k_x; a bond
+                   whose rest offset is 0 holds k_x x / a up to its break)
+      L_c          ``andrews_lc`` with the block's M (the Born continuum's static mode II modulus)
+      L_andrews    f(S) L_c (``andrews_f``): Andrews' transition distance for the S measured
+      L_trans      the distance from the origin to the birth of the first daughter born ahead of its tip
+                   (``daughters``) beyond ``beyond``, NaN when none was
+      L_fast       the distance from the origin to the first site (beyond ``beyond``) from which the tip ran
+                   above c_s over ``min_sites`` sites (a line fitted through their arrivals), NaN when it
+                   never did (speeds in c_r; the run's c_s, ``fronts.wave_speeds``)
+      v_super      the speed the supershear front settled at: the daughter's steady speed (over the middle
+                   60 % of its sites) when there is one, else the mother's, fitted from L_fast on
+      daughter     the daughter's catalogue index, or None."""
+    l = float(run.scene["lattice.top_cols"])
+    M, unit = _modulus_and_stress_unit(run)
+    x0 = front.nucleation_x if origin is None else origin
+    edge = x0 if beyond is None else beyond
+    d = front.direction or 1
+    gone = (np.asarray(front.tip["x"], float) - edge) * d > 0          # the tip beyond ``beyond``
+    launch = float(np.asarray(front.tip["t"], float)[gone].min()) if beyond is not None and gone.any() else None
+    s = andrews_s(run, front, t0=launch)
+    kx = float(np.median(run.interface["kx"])) if "kx" in run.interface else float(run.scene["interface.kx"])
+    tp, t0, tr = (s[k] * unit for k in ("tau_peak", "tau_0", "tau_res"))
+    d_c = tp / kx
+    L_c = float(andrews_lc(M, tp, t0, tr, d_c))
+    fronts = run.fronts(**kw)
+    me = next((i for i, f in enumerate(fronts) if f is front or (f.nucleation_time == front.nucleation_time
+               and f.nucleation_x == front.nucleation_x)), None)
+
+    def past(x: float) -> bool:
+        return (x - edge) * d > 0 and (before is None or (before - x) * d > 0)
+    kids = sorted((k for k in daughters(run, **kw) if k["mother"] == me and past(k["x"])),
+                  key=lambda k: k["t"])
+    L_trans, v_super, kid = math.nan, math.nan, None
+    if kids:
+        kid = kids[0]["daughter"]
+        L_trans = abs(kids[0]["x"] - x0) * l
+        v_super = abs(fronts[kid].steady_speed)
+    L_fast, v_fast = _first_supershear(front, past, wave_speeds(run)["c_s"], min_sites)
+    if math.isfinite(L_fast):
+        L_fast = abs(L_fast - x0) * l
+        if kid is None:
+            v_super = v_fast
+    return {"launch": launch, "S": s["S"], "tau_0": s["tau_0"], "tau_peak": s["tau_peak"],
+            "tau_res": s["tau_res"], "d_c": d_c, "L_c": L_c, "L_andrews": float(L_c * andrews_f(s["S"])),
+            "L_trans": L_trans, "L_fast": L_fast, "v_super": v_super, "daughter": kid}
 
 
 def speed_summary(run, **kw) -> dict:
