@@ -160,6 +160,21 @@ def test_info_warns_where_damping_freezes_the_block(capsys, tmp_path):
     assert "block is frozen" in out and f"c_s/H = {cs / h:.3g}" in out
 
 
+def test_bonds_damping_freezes_only_where_its_dashpots_outrun_the_height_wave(capsys, tmp_path):
+    """Under time.damping = "bonds" the slowest wave across the height (omega = pi c_s/H) is damped at
+    beta omega^2 = zeta pi^2 c_s^2/(k_n H^2): the warning comes above zeta = k_n H/(pi^2 c_s) (0.674 on SMALL),
+    not at the body drag's c_s/H = 0.42, and never at the paper's zeta."""
+    h = 3 * ROW_HEIGHT
+    mat = derive(scene(**SMALL)).material
+    limit = mat.kn_top * h / (math.pi ** 2 * mat.c_s)
+    assert limit > 1.5 * mat.c_s / h                   # the two forms' thresholds are apart
+    for zeta, warned in ((0.1, False), (1.05 * mat.c_s / h, False), (0.95 * limit, False), (1.05 * limit, True)):
+        code, out, _ = _info(capsys, tmp_path, **{"time.zeta": zeta, "time.damping": "bonds"})
+        assert code == 0
+        assert ("block is frozen" in out) == warned, (zeta, out)
+    assert f"k_n H/(pi^2 c_s) = {limit:.3g}" in out
+
+
 # ------------------------------------------------------------------------------------------- drive speed --
 
 def test_slowest_drive_moves_its_face_exactly_and_warns_that_nothing_breaks(capsys, tmp_path):

@@ -104,6 +104,14 @@ class Damping:
         b = max(self.beta(k) for k in kns)
         return math.sqrt(b * b + dt_max(omega_max) ** 2) - b
 
+    def mode_rate(self, omega: float, kn: float) -> float:
+        """Twice the rate (c/a) at which a mode of frequency omega (c/a) loses amplitude in a block of normal
+        stiffness k_n: zeta for the body drag, whatever omega; beta omega^2 for the bonds' dashpots (so
+        long waves are hardly damped); 0 without damping."""
+        if self.rated:
+            return self.beta(kn) * omega * omega
+        return self.drag
+
     def unlike_reference(self) -> list[str]:
         """The damping options the reference engine (the paper's body drag) does not have, as "key = value"."""
         return [f"time.damping = {self.form!r}"] if self.form != "absolute" else []

@@ -4,7 +4,7 @@
 and `parslip run` logs them at start-up (rank 0).  Scenes that cannot run at
 all are refused instead (``scene.limits``).
 
-Heavy damping, 1/zeta < H/c_s (H = (top_rows - 1) sqrt(3)/2 a, the block's height):
+Heavy damping, r > c_s/H (H = (top_rows - 1) sqrt(3)/2 a, the block's height; r = zeta for the body drag):
     the damping term -zeta du/dt is a drag against the laboratory frame; a
     wave's amplitude decays as exp(-zeta t/2).  Every load reaches the
     interface through the block's height (the normal load; the shear of a T0
@@ -18,6 +18,12 @@ Heavy damping, 1/zeta < H/c_s (H = (top_rows - 1) sqrt(3)/2 a, the block's heigh
     contact length is the wrong yardstick: l/c_s = 100 a/c would flag the
     paper's own setting, and a rupture front is fed by the strain energy next
     to its tip, not by waves that crossed the whole contact.
+    With time.damping = "bonds" the dashpots damp a mode of frequency omega at
+    r = beta omega^2 (``model.damping``), so the test is on the slowest wave
+    that crosses the height, omega = pi c_s/H: r = beta pi^2 c_s^2/H^2 > c_s/H,
+    i.e. H < pi^2 beta c_s.  A tall block is freer, not more frozen: at zeta =
+    0.1 (beta = 0.036 a/c) only blocks below 0.4 a are, so the warning is for
+    extreme zeta only.
 
 Fast drive, v0 > 0.1 c_r:
     a face moved at v0 sends out a wave carrying the strain v0/c (c = c_l
@@ -60,19 +66,36 @@ def block_height(setup) -> float:
     return (setup.lattice.top.rows - 1) * ROW_HEIGHT
 
 
+def _frozen(st) -> list[str]:
+    """The heavy-damping warning (module docstring): the block's slowest wave across its height, omega =
+    pi c_s/H, damped at r (``Damping.mode_rate``) faster than it crosses, r > c_s/H."""
+    zeta, mat, damping = st.scene["time.zeta"], st.material, st.damping
+    h = block_height(st)
+    if zeta <= 0 or h <= 0:
+        return []
+    cross = mat.c_s / h
+    if damping.rated:
+        rate = damping.mode_rate(math.pi * cross, mat.kn_top)
+        if rate <= cross:
+            return []
+        return [f"time.zeta = {zeta:g} with time.damping = 'bonds': the dashpots damp the slowest wave across the "
+                f"block's height (omega = pi c_s/H, H = {h:.3g} a) at beta omega^2 = {rate:.3g} c/a, faster than "
+                f"it crosses (c_s/H = {cross:.3g} c/a): the block is frozen; for a dynamic block use "
+                f"time.zeta < k_n H/(pi^2 c_s) = {mat.kn_top * h / (math.pi ** 2 * mat.c_s):.3g}"]
+    if 1.0 / zeta >= h / mat.c_s:
+        return []
+    return [f"time.zeta = {zeta:g}: the damping time 1/zeta = {1 / zeta:.3g} a/c is shorter than the "
+            f"{h / mat.c_s:.3g} a/c a shear wave needs to cross the block's height (H/c_s, H = {h:.3g} a): waves "
+            f"die before they reach the interface, stress diffuses across H in about zeta H^2/c_s^2 = "
+            f"{zeta * h * h / mat.c_s ** 2:.3g} a/c and the block is frozen; for a dynamic block use "
+            f"time.zeta < c_s/H = {mat.c_s / h:.3g}"]
+
+
 def warnings(setup) -> list[str]:
     """One line per concern about the scene of ``setup`` (empty when there is none)."""
     st, s, mat = setup, setup.scene, setup.material
     out = []
-    zeta = s["time.zeta"]
-    h = block_height(st)
-    if zeta > 0 and 1.0 / zeta < h / mat.c_s:
-        out.append(
-            f"time.zeta = {zeta:g}: the damping time 1/zeta = {1 / zeta:.3g} a/c is shorter than the "
-            f"{h / mat.c_s:.3g} a/c a shear wave needs to cross the block's height (H/c_s, H = {h:.3g} a): waves "
-            f"die before they reach the interface, stress diffuses across H in about zeta H^2/c_s^2 = "
-            f"{zeta * h * h / mat.c_s ** 2:.3g} a/c and the block is frozen; for a dynamic block use "
-            f"time.zeta < c_s/H = {mat.c_s / h:.3g}")
+    out += _frozen(st)
     if st.lattice.has_interface and s["load.FN"] > HEAVY_LOAD * closing_load(s):
         close = closing_load(s)
         gap = st.law.delta0 * (1 - s["load.FN"] / close)
