@@ -1,6 +1,7 @@
 """Fixtures shared by the analysis tests: one short real push run, made once per session.
 
-Also puts the MPI launcher that matches mpi4py's MPI first on PATH for the whole suite.
+Also puts the MPI launcher that matches mpi4py's MPI first on PATH for the whole suite, points every
+process at one kernel cache, and fills that cache in the background while the session starts.
 """
 import os
 import sysconfig
@@ -43,6 +44,62 @@ def _one_kernel_cache_for_the_session() -> None:
 
 
 _one_kernel_cache_for_the_session()
+
+# Kernel variants the tests use that the first test file (one rank, float64, in this process) does not
+# compile: the time loop on several ranks, and in float32.  Each scene is SMALL for 0.1 l/c_r.
+WARM_UPS = ((2, ()), (1, ("--set", "time.precision=float32")))
+_warming = []
+
+
+def pytest_sessionstart(session):
+    """Fill the kernel cache in the background while pytest collects and the first tests run.
+
+    On a cold cache (a fresh clone) the first run of each loop variant compiles it, about 40 s of a
+    core.  Left to the tests, the multi-rank variant is compiled by every rank of the first MPI test
+    at once (three ranks on two cores), under that test's hard time limit, after the one-rank variant
+    was compiled on one core while the other idled.  Started here, the compiles overlap collection
+    and the first in-process tests instead; on a warm cache each warm-up only loads the loop.  A test
+    that needs a variant before its warm-up has stored it compiles it as before, so the warm-ups
+    change no result and no test waits for them.  Started for the suite or a folder of it only: a run
+    of chosen test files needs some of these variants at most, and a warm-up it does not need would
+    take a core from it.  Not started in the per-test pytest processes mpi-pytest launches, nor
+    without the mpich wheel's launcher.
+    """
+    import shutil
+    import subprocess
+    import tempfile
+
+    from helpers import WHEEL_MPIEXEC, cli_command, cli_env
+    chosen = [a for a in session.config.args if not os.path.isdir(a)]
+    if chosen or "_PYTEST_MPI_CHILD_PROCESS" in os.environ or not WHEEL_MPIEXEC:
+        return
+    d = tempfile.mkdtemp(prefix="parslip-warm-")
+    sc = os.path.join(d, "warm.toml")
+    with open(sc, "w") as fh:
+        fh.write(small_toml(**{"drive.duration": 0.1, "output.snapshots": 0}))
+    for k, (n, sets) in enumerate(WARM_UPS):
+        cmd = cli_command(n, "run", sc, "--out", os.path.join(d, f"w{k}.vtkhdf"), "--no-png", "--quiet", *sets)
+        _warming.append(subprocess.Popen(cmd, env=cli_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                         start_new_session=True))
+    _warming.append(lambda: shutil.rmtree(d, ignore_errors=True))
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """End warm-ups still running (a short session) with their ranks, and remove their folder."""
+    import signal
+
+    from helpers import ranks_below
+    for w in _warming:
+        if callable(w):
+            w()
+        elif w.poll() is None:
+            for pid in ranks_below(w.pid):          # in sessions of their own under Hydra
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except OSError:
+                    pass
+            os.killpg(w.pid, signal.SIGKILL)
+            w.wait()
 
 # SMALL driven long enough for three to four pulses from the rear edge.
 SMALL_RUN = {"drive.duration": 10.0, "output.snapshots": 4}

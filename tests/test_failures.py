@@ -10,6 +10,7 @@ the ranks before the time limit, while nothing else handles it.  Both
 writers, each with its own MPI.
 """
 import os
+import re
 import selectors
 import signal
 import subprocess
@@ -48,6 +49,15 @@ def _wait_for_line(proc, fragment, timeout):
         if sel.select(timeout=1):
             seen += os.read(proc.stderr.fileno(), 65536).decode(errors="replace")
     return seen
+
+
+def _lcr_after(scene, status) -> float:
+    """The drive time (l/c_r) of the step a status "... at step N" names."""
+    from parslip.scene.derive import derive
+    from parslip.scene.load import load
+    st = derive(load(str(scene)))
+    step = int(re.search(r"at step (\d+)", status).group(1))
+    return float(max(step - st.n_drive_start, 0) * st.dt / st.t_unit)
 
 
 def _ctrl_c(proc):
@@ -96,8 +106,12 @@ def test_interrupt_leaves_a_readable_file_and_a_checkpoint(tmp_path, long_scene,
         assert k > 0
         intact = f["interface/intact"][:k]
     assert intact.shape[1] == 24 and set(intact.ravel().tolist()) <= {0, 1}
-    p = run_cli(2, "run", long_scene, "--out", out, "--no-png", "--quiet", "--restart", "auto", writer=writer,
-                timeout=300)
+    # Continued from that checkpoint to an end 20 l/c_r past its step (drive.duration may change on a
+    # restart): the same restart as to the scene's own end, without the 900,000 steps left of it, which
+    # cost seconds on an idle host and ran past the hard limit on a loaded one.
+    p = run_cli(2, "run", long_scene, "--out", out, "--no-png", "--quiet", "--restart", "auto", "--set",
+                f"drive.duration={_lcr_after(long_scene, status) + 20.0!r}", writer=writer, timeout=300)
     assert p.returncode == 0, p.stderr
     with h5py.File(out, "r") as f:
         assert read_status(f) == "complete"
+        assert int(f["interface"].attrs["frames_written"]) > k          # it went on from the checkpoint

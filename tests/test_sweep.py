@@ -200,8 +200,11 @@ def _state(pid: int) -> str:
 
 def test_a_killed_sweep_resumes_its_point_from_the_checkpoint(here):
     """SIGKILL while the first point runs (after its first checkpoint): the sweep run again finds it
-    'running', continues it from the checkpoint, runs the rest; its file equals an uninterrupted run's."""
-    long = {"drive.duration": 400.0, "drive.v0": 0.002, "checkpoint.every": 20.0}
+    'running', continues it from the checkpoint, runs the rest; its file equals an uninterrupted run's.
+
+    The point stops itself at 30 l/c_r of its 50 (the hook), between its checkpoints at 20 and 40: a
+    longer drive would only lengthen the resumed point, the second point and the reference run."""
+    long = {"drive.duration": 50.0, "drive.v0": 0.002, "checkpoint.every": 20.0}
     text = 'base = "tiny.toml"\n[set]\n' + "".join(f'"{k}" = {v}\n' for k, v in long.items()) + \
         '[grid]\n"load.FN" = [1.0, 0.5]\n'
     path = _write(here / "long.toml", text)
@@ -212,7 +215,7 @@ def test_a_killed_sweep_resumes_its_point_from_the_checkpoint(here):
     from parslip.scene.derive import derive
     from parslip.scene.load import load
     st = derive(load(str(here / "tiny.toml"), {**long, "load.FN": 1.0}))
-    stop = st.n_drive_start + (st.n_steps - st.n_drive_start) * 30 // 400
+    stop = st.n_drive_start + (st.n_steps - st.n_drive_start) * 30 // 50
     p = subprocess.Popen(cmd, cwd=here, env={**env, "PARSLIP_TEST_HOOKS": f"stop_at=0:{stop}"},
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     ckpt = here / "out" / "points" / "p000.vtkhdf.ckpt.h5"
