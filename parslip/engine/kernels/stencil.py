@@ -137,7 +137,9 @@ def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, dam
     return ds, ks, es
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+# Not inlined: its eight loops are compiled once, in a function of their own, and called once per row segment
+# (not per node); inlined into each of its call sites they made the time loop's cold compile several minutes.
+@njit(cache=True, _nrt=False, fastmath={"contract"})
 def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
     forces are those of the field (zx, zy) (u(t) itself, or with the bonds' dashpots ``rate_field``).
@@ -188,7 +190,8 @@ def _views(zx, zy, r, rr, j0, n, s, up):
     return xm, x0, xp, ym, y0, yp, xa, xb, ya, yb
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+# Not inlined either (as ``row_full``): a call per row segment of a block's edge rows.
+@njit(cache=True, _nrt=False, fastmath={"contract"})
 def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, drag, rated, energy,
              cs):
     """Row segment of a block's top row (``up`` False: no up bonds) or bottom row (``up`` True: no down bonds).
