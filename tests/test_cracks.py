@@ -67,6 +67,14 @@ def test_born_velocity_function_is_freunds_for_a_cauchy_solid(v):
         cracks.freund_mode2(v, c_s, c_l, DENSITY * c_s ** 2), rel=1e-9)
 
 
+@pytest.mark.parametrize("kn, kt", [CAUCHY, (2.81154, 0.133883)])
+def test_route_2_is_defined_below_the_shear_speed_only(kn, kt):
+    """``subshear`` (route 2's guard) switches at the Born continuum's shear speed (physics.born_wave_speeds)."""
+    _, c_s = born_wave_speeds(kn, kt)
+    assert cracks.subshear(0.0, kn, kt) and cracks.subshear(0.99 * c_s, kn, kt)
+    assert not cracks.subshear(1.01 * c_s, kn, kt)
+
+
 def test_the_laid_field_is_a_mode_2_crack():
     """Traction K_II / sqrt(2 pi x) ahead on the crack plane, none on the upper face (Born stress of the field,
     by finite differences just above the plane)."""

@@ -265,6 +265,16 @@ def mode2_fit_shifted(xi, sigma) -> tuple[float, float]:
     return sign * math.sqrt(2 * math.pi / a), b / a
 
 
+def subshear(v: float, kn: float, kt: float, rho: float = DENSITY) -> bool:
+    """Whether a crack steady at speed v (internal units) in the Born continuum of (k_n, k_t) has the two
+    decaying Stroh roots (``_stroh``) that ``mode2_compliance`` needs: v below the shear speed."""
+    try:
+        _stroh(born_moduli(kn, kt, rho), max(v, 1e-3 * math.sqrt(kn + kt)), rho)
+    except ValueError:
+        return False
+    return True
+
+
 def field_g(K: float, v: float, kn: float, kt: float, rho: float = DENSITY) -> float:
     """G = 1/2 H(v) K_II^2 (``mode2_compliance``), all internal units."""
     return 0.5 * mode2_compliance(v, kn, kt, rho) * K * K
@@ -441,7 +451,8 @@ def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
     over the sites xi = window[0] Lambda .. window[1] Lambda ahead of the tip, a frame whose window leaves the
     contact skipped; G = ``field_g`` at the stretch's speed.  Rows {"t", "x_tip", "V", "K_II" (rho c_r^2
     a^(1/2)), "tau_0" (rho c_r^2), "G" (m c_r^2 / a)}.  The frames are fitted together (one array operation),
-    and H(v) is computed once: the stretch has one speed.
+    and H(v) is computed once: the stretch has one speed.  No rows for a stretch at or above the shear speed
+    (``subshear``): there H(v) does not exist.
 
     The tip is the front's own at each frame (``tip_at``), not the stretch's fitted line: the fit puts the
     singularity at xi = 0, so a tip misplaced by a few a (a front that speeds up or slows down over the
@@ -461,6 +472,8 @@ def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
     ks, x_tip, xi, sel = ks[whole], x_tip[whole], xi[whole], sel[whole]
     if not len(ks):
         return []
+    if not subshear(abs(st["V"]) * c_r, m.kn_top, m.kt_top):
+        return []                     # at or above c_s the field has no K_II / sqrt(xi) term for H(v) to weigh
     sxy = np.asarray(run.interface["sxy"][ks], float)
     K, tau0 = mode2_fit(np.where(sel, xi, np.nan), np.where(sel, sxy, np.nan))
     G = field_g(K * DENSITY * c_r * c_r, abs(st["V"]) * c_r, m.kn_top, m.kt_top) / c_r ** 2

@@ -22,7 +22,7 @@ from parslip.analysis.fronts import wave_speeds
 from parslip.plot.figures import pyplot, save
 from parslip.studies.cracks import points, sweeps, write
 
-COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "top_rows",
+COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "v0", "top_rows",
         "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner",
         "G_contour_outer", "G_field", "Gamma", "take_inner", "take_outer", "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio",
         "contours_ratio", "route1_ok", "field_resolved", "snapshots", "frames"]
@@ -55,7 +55,8 @@ def front_row(sweep: str, row: dict, run, k: int, front) -> dict:
     inner_outer = _ratio(e["G_contour_inner"], e["G_contour_outer"])
     return {"sweep": sweep, "point": row["point"], "run": os.path.basename(run.path), "front": k, "first": k == 0,
             "t_nuc": front.nucleation_time, "x_nuc": front.nucleation_x, "damping": s["time.damping"],
-            "zeta": s["time.zeta"], "kx": s["interface.kx"], "FN": s["load.FN"], "top_rows": s["lattice.top_rows"],
+            "zeta": s["time.zeta"], "kx": s["interface.kx"], "FN": s["load.FN"],
+            "v0": s["drive.v0"], "top_rows": s["lattice.top_rows"],
             "bottom_kn": s["material.bottom_kn"], "bottom_kt": s["material.bottom_kt"],
             "height_lambda": height_lambda(run), "Lambda": e["Lambda"], "v": e["v"], "v_over_cR": e["v"] / c_R,
             "band": front.band or "-", "G_contour_inner": e["G_contour_inner"],
@@ -83,7 +84,9 @@ def rows_of(runs: str) -> list[dict]:
 
 
 def _label(r: dict) -> str:
-    return f"{r['damping']} {r['zeta']:g}, k_x {r['kx']:g}, {r['height_lambda']:.3g} Lambda"
+    # F_N and v0 only where a sweep moves them off the scene's 1 and 1e-3 (they set the front's speed there)
+    load = (f", F_N {r['FN']:g}" if r["FN"] != 1.0 else "") + (f", v0 {r['v0']:g}" if r["v0"] != 1e-3 else "")
+    return f"{r['damping']} {r['zeta']:g}, k_x {r['kx']:g}, {r['height_lambda']:.3g} Lambda{load}"
 
 
 def _colours(rows: list[dict]) -> dict:
