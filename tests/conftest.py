@@ -54,7 +54,7 @@ _warming = []
 def pytest_sessionstart(session):
     """Fill the kernel cache in the background while pytest collects and the first tests run.
 
-    On a cold cache (a fresh clone) the first run of each loop variant compiles it, about 90 s of a
+    On a cold cache (a fresh clone) the first run of each loop variant compiles it, about 130 s of a
     core.  Left to the tests, the multi-rank variant is compiled by every rank of the first MPI test
     at once (three ranks on two cores), under that test's hard time limit, after the one-rank variant
     was compiled on one core while the other idled.  Started here, the compiles overlap collection

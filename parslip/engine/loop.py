@@ -56,7 +56,8 @@ from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
 from .kernels.scheme import ramp_share
-from .kernels.stencil import K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge, row_full
+from .kernels.stencil import (K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge, row_full,
+                              row_full_called)
 
 # State: each block as [row, column] arrays, x and y apart, at two Verlet levels; and the field z whose bond
 # forces the update takes with the bonds' damping (``kernels.stencil.rate_field``; 1 x 1 arrays without it).
@@ -249,8 +250,8 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
         tk = tasks[t]
         r, j, s = tk.row, tk.j0, tk.s
         if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, drag, rated,
-                               energy, cs)   # interior node, slab edge
+            d, k, e = row_full_called(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, drag,
+                                      rated, energy, cs)   # interior node, slab edge
         else:
             fx = ex[j] if tk.extra else zero
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)

@@ -137,9 +137,7 @@ def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, dam
     return ds, ks, es
 
 
-# Not inlined: its eight loops are compiled once, in a function of their own, and called once per row segment
-# (not per node); inlined into each of its call sites they made the time loop's cold compile several minutes.
-@njit(cache=True, _nrt=False, fastmath={"contract"})
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs):
     """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
     forces are those of the field (zx, zy) (u(t) itself, or with the bonds' dashpots ``rate_field``).
@@ -162,6 +160,16 @@ def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, e
     if energy:
         return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, True)
     return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, False)
+
+
+# Called, not inlined: for the single nodes at a slab's edge, which must give row_full's bits (the serial run
+# updates them inside a row segment).  Inlined there as well, row_full's eight loops were sixteen copies in the
+# time loop and its cold compile took 204 s of CPU; inlined only into the row segments' loop, where a call per
+# segment cost 4 % of a step at l = 500.
+@njit(cache=True, _nrt=False, fastmath={"contract"})
+def row_full_called(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs):
+    """``row_full``, as a call."""
+    return row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
@@ -190,7 +198,7 @@ def _views(zx, zy, r, rr, j0, n, s, up):
     return xm, x0, xp, ym, y0, yp, xa, xb, ya, yb
 
 
-# Not inlined either (as ``row_full``): a call per row segment of a block's edge rows.
+# Not inlined (as ``row_full_called``): a call per row segment of a block's edge rows, a few rows of many.
 @njit(cache=True, _nrt=False, fastmath={"contract"})
 def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, drag, rated, energy,
              cs):
