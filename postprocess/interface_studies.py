@@ -19,10 +19,9 @@ import numpy as np
 
 from parslip.analysis import rupture, table
 from parslip.plot.figures import pyplot, save
-from parslip.analysis.friction import slip_events
+from parslip.analysis.friction import first_crossing, reformations, slip_events
 from parslip.analysis.fronts import BANDS, wave_speeds
 from parslip.analysis.results import Run
-from parslip.io.contract import EVENT_FORM as FORM
 
 
 STUDIES = ["precursors", "barriers", "supershear", "damping", "heal_time", "heal_speed"]
@@ -47,24 +46,6 @@ def write(rows, cols, path):
 def patch_of(run):
     p = run.scene.get("interface.patch") or []
     return (p[-1]["x"][0], p[-1]["x"][1], p[-1].get("delta_b", math.nan)) if p else (math.nan, math.nan, math.nan)
-
-
-def first_crossing(run, fr):
-    fates = run.fates()
-    for f, w in zip(fr, fates):
-        if w == "crossed":
-            return f
-    return fr[0] if fr else None
-
-
-def reformed_before_crossed(run, f) -> int:
-    """Re-formations on the front's path between its nucleation and its last site (Sec. 3.3.1: a crack
-    re-attaches only after the rupture has crossed)."""
-    ev = run.events
-    if ev is None or f is None:
-        return -1
-    t0, t1 = f.nucleation_time, f.t_end
-    return int(np.sum((ev["kind"] == FORM) & (ev["time"] > t0) & (ev["time"] < t1)))
 
 
 def precursors_study(d):
@@ -156,7 +137,7 @@ def heal_study(d, study):
             r["drive.v0"] = row["drive.v0"]
         v = abs(f.mean_speed) if f else math.nan
         r.update({"kind": f.kind if f else "-", "mean v": v,
-                  "width a": f.width if f else math.nan, "re-formed before crossing": reformed_before_crossed(run, f),
+                  "width a": f.width if f else math.nan, "re-formed before crossing": reformations(run, f.nucleation_time, f.t_end) if f else -1,
                   "n_fronts": len(fr), "n_crossed": row["n_crossed"], "mu_s": row["mu_s"],
                   "scene": row["scene"], "commit": row["commit"]})
         rows.append(r)

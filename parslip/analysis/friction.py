@@ -79,6 +79,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..io.contract import EVENT_FORM
 from .fronts import Front, first_break, front_field, json_value, table
 
 EDGE_FRACTION = 0.02    # a tip within this share of the contact (at least one site) of an edge has reached it
@@ -456,3 +457,21 @@ def sinking(run) -> np.ndarray:
         return np.zeros(0)
     l_a = float(run.scene.get("lattice.top_cols") or uy.shape[1])
     return -(uy - uy[0]).min(axis=1) * l_a
+
+
+def first_crossing(run, fronts: list):
+    """The first of ``fronts`` (the run's catalogue) whose own tip crossed the contact (fate "crossed"), else
+    the first front, else None: the front a study's row describes."""
+    for f, fate in zip(fronts, run.fates()):
+        if fate == "crossed":
+            return f
+    return fronts[0] if fronts else None
+
+
+def reformations(run, t0: float = 0.0, t1: float = math.inf) -> int:
+    """Bonds re-formed at t0 < t < t1 (l/c_r), counted from the event record; -1 for a run without one."""
+    ev = run.events
+    if ev is None:
+        return -1
+    t = np.asarray(ev["time"])
+    return int(np.sum((np.asarray(ev["kind"]) == EVENT_FORM) & (t > t0) & (t < t1)))

@@ -22,8 +22,7 @@ import os
 
 import numpy as np
 
-from parslip.analysis.friction import sinking
-from parslip.io.contract import EVENT_FORM
+from parslip.analysis.friction import first_crossing, reformations, sinking
 from parslip.plot.figures import pyplot, save
 
 from . import points, sweeps, write
@@ -38,24 +37,6 @@ SWEPT = {"time": "interface.heal_time", "speed": "interface.heal_speed", "stiff"
 # The sinking drawn: the T0 rows with a delay past the old threshold, at both scenes.
 SINK_DRAWN = (2.0, 5.0)
 SINK_SWEEPS = ("cracks_healing_time", "cracks_healing_l500")
-
-
-def first_crossing(run, fr):
-    """The first front whose own tip crossed the contact (fate "crossed"), else the first front, else None:
-    the front the old tables described."""
-    for f, w in zip(fr, run.fates()):
-        if w == "crossed":
-            return f
-    return fr[0] if fr else None
-
-
-def reformations(run, t0: float = 0.0, t1: float = math.inf) -> int:
-    """Bonds re-formed with t0 < t < t1 (l/c_r), from the event record; -1 without one."""
-    ev = run.events
-    if ev is None:
-        return -1
-    t = np.asarray(ev["time"])
-    return int(np.sum((np.asarray(ev["kind"]) == EVENT_FORM) & (t > t0) & (t < t1)))
 
 
 def rebond_window(scene: dict) -> float:
