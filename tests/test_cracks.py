@@ -439,7 +439,7 @@ def test_route_2_needs_blocks_many_process_zones_tall(height, near):
     """The run's interface (k_y = 3 k_x, k_x = 0.4: Lambda = 4.2 a) between two blocks of the run's solid,
     `height` Lambda tall, the top row moved along x and the bottom row held, the crack the plane's left half
     of a 300 a contact: route 2 (``mode2_fit`` at FIT_WINDOW Lambda ahead, ``field_g``) returns the energy the
-    lattice releases per spacing within 10 % at 20 Lambda; at 5 Lambda (the block of run/cracks_l500.toml)
+    lattice releases per spacing within 10 % at 20 Lambda; at 5 Lambda (100 rows at k_x = 0.1)
     it returns under 80 % of it: the blocks bound the singular field to a few Lambda, the window's far end is
     3 Lambda, and no square-root field lies between.  ``field_resolved`` asks for FIELD_HEIGHT Lambda."""
     kn, kt = RUN_SOLID
@@ -457,3 +457,23 @@ def test_route_2_needs_blocks_many_process_zones_tall(height, near):
     ratio = cracks.field_g(K, 0.0, kn, kt) / G
     assert (abs(ratio - 1) < 0.1) if near else (ratio < 0.8)
     assert (height >= cracks.FIELD_HEIGHT) == near
+
+
+
+def test_the_G_scene_resolves_both_routes():
+    """run/cracks_l500.toml is the scene of the G target (two contours within 10 %, routes within 15 %): a
+    crack between identical solids whose blocks are each at least 20 process zones tall, where static strips
+    give route 2 within 10 % (test_route_2_needs_blocks_many_process_zones_tall); at the paper-like k_x = 0.1
+    they would be 5.2 Lambda and route 2 null by design (``field_resolved``)."""
+    import pathlib
+
+    from parslip.scene.load import load
+
+    s = load(str(pathlib.Path(__file__).resolve().parent.parent / "run" / "cracks_l500.toml"))
+    run = SimpleNamespace(scene=s, interface={})
+    m = cracks._material(run)
+    assert s["lattice.substrate"] == "elastic" and s["lattice.bottom_rows"] >= s["lattice.top_rows"]
+    assert (m.kn_top, m.kt_top) == pytest.approx((s["material.bottom_kn"], s["material.bottom_kt"]), rel=1e-5)
+    height = s["lattice.top_rows"] * ROW_HEIGHT / cracks.process_zone(run)
+    assert height >= 20 and cracks.field_resolved(run), height
+    assert not cracks.field_resolved(SimpleNamespace(scene={**s, "interface.kx": 0.1}, interface={}))

@@ -631,7 +631,7 @@ def field_resolved(run, height: float = FIELD_HEIGHT) -> bool:
     """Whether the near-tip field route 2 fits can exist: each elastic block at least ``height`` Lambda tall
     (rows times the row height sqrt(3)/2 a).  The blocks' far rows (driven, held) bound the square-root field
     to a fraction of their height, and the window reaches 3 Lambda: in static lattice cracks the fit returns
-    two thirds of G between blocks 5 Lambda tall (run/cracks_l500.toml's 100 rows against Lambda = 16.7 a;
+    two thirds of G between blocks 5 Lambda tall (100 rows against Lambda = 16.7 a, k_x = 0.1;
     the paper's 10 rows hold only the block's beam response) and G within 10 % at 20 Lambda
     (``FIELD_HEIGHT``).  A running front loses more: the field's higher-order terms grow with speed."""
     s, reach = run.scene, height * process_zone(run)

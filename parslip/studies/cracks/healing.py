@@ -13,7 +13,7 @@ share of bonds intact at the end, and the deepest any block site went below its 
 
 Sweeps (``run/studies/cracks_healing*.toml``): ``_time`` and ``_speed`` are the old sweeps on the old scene
 (l = 100 a), ``_stiff`` a stiffer contact on the rows that change, ``_l500`` T0 rows on the resolved
-identical-solid scene (run/cracks_l500.toml).
+identical-solid scene (run/cracks_l500.toml, with k_x = 0.1 and the old damping).
 """
 from __future__ import annotations
 
