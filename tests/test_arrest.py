@@ -43,3 +43,32 @@ def test_arrest_of_a_step_drop_matches_an_independent_root():
     assert arrest.predicted_length(G, gamma) == pytest.approx(L_root, abs=1.0)
     assert arrest.predicted_length(G, 2 * G.max()) != arrest.predicted_length(G, 2 * G.max())   # NaN: no front
     assert arrest.predicted_length(np.linspace(1, 2, 50), 0.5) == 50.0                        # never falls: crosses
+
+
+def test_uniform_drop_on_an_interior_crack_is_griffiths():
+    """A crack of length L = 2c under a uniform drop: K = dtau sqrt(pi c) at either tip."""
+    for L in (7.0, 40.0, 333.0):
+        assert arrest.interior_k(np.full(400, 0.3), L) == pytest.approx(0.3 * math.sqrt(math.pi * L / 2), rel=1e-6)
+
+
+def test_interior_arrest_of_a_step_drop_matches_an_independent_root():
+    """The interior crack's K by scipy's quadrature of its singular form, 1/sqrt(pi L/2) int_0^L p(s)
+    sqrt(s/(L - s)) ds with the weight (L - s)^-1/2 left to quad; the root of G = Gamma by brentq."""
+    b, dtau, tau_r, H0 = 60, 0.05, 0.02, 3.0
+
+    def k_quad(L):
+        alg = dict(weight="alg", wvar=(0.0, -0.5))           # the weight (L - s)^-1/2 on [lo, L]
+        if L <= b:
+            total = integrate.quad(lambda s: dtau * math.sqrt(s), 0.0, L, **alg)[0]
+        else:
+            total = (integrate.quad(lambda s: dtau * math.sqrt(s / (L - s)), 0.0, b)[0]
+                     + integrate.quad(lambda s: -tau_r * math.sqrt(s), b, L, **alg)[0])
+        return total / math.sqrt(math.pi * L / 2)
+
+    drop = np.r_[np.full(b, dtau), np.full(400, -tau_r)]
+    G = arrest.release_curve(drop, H0, "interior")
+    assert G[b - 1] == pytest.approx(0.5 * H0 * k_quad(b) ** 2, rel=1e-3)
+    gamma = 0.5 * G[b - 1]
+    L_zero = optimize.brentq(k_quad, b + 1e-9, 20 * b)
+    L_root = optimize.brentq(lambda L: 0.5 * H0 * k_quad(L) ** 2 - gamma, b, L_zero)
+    assert arrest.predicted_length(G, gamma) == pytest.approx(L_root, abs=1.0)

@@ -12,18 +12,27 @@ the edge crack in a semi-infinite plate, as Kammer et al. 2015 use it):
          = 2 sqrt(L/pi) int_0^{pi/2} dtau(L sin th) F(sin th) d th,
     F(s) = 1 + (1 - s^2)(0.2945 - 0.3912 s^2 + 0.7685 s^4 - 0.9942 s^6 + 0.5094 s^8),
 
-so a uniform drop gives K = 1.1215 dtau sqrt(pi L).  The energy release rate is G(L) = 1/2 H(0) K^2 with H(0)
-the static mode II compliance of the block's Born continuum (signed, 1/2 H(0) K |K|: a crack pushed
-back, K < 0, does not count as driven) (``cracks.mode2_compliance``: (1 - nu)/mu for an
-isotropic solid).  The front stops where G falls to the fracture energy Gamma: the predicted arrest is the
-first L, past the first one at which G reached Gamma, where G < Gamma again.  The half-plane has no height:
-the prediction holds for L below the block's height H; a longer crack in a block of finite height releases
-more than the half-plane's G (the block's bending adds to it), so there the prediction is short of a
-lattice that follows the continuum.
+so a uniform drop gives K = 1.1215 dtau sqrt(pi L).  A front that nucleated inside the contact (further than
+``friction.edge_sites`` from the edge it runs away from) is taken as a crack on an unbounded interface between
+its trailing tip, fixed at the nucleation site, and its leading tip, L ahead: the leading tip of a Griffith
+crack with arbitrary face loads (Tada et al. 2000), s measured from the trailing tip,
+
+    K(L) = 1/sqrt(pi L/2) int_0^L dtau(s) sqrt(s/(L - s)) ds
+         = 2 sqrt(2L/pi) int_0^{pi/2} dtau(L sin^2 th) sin^2 th d th,
+
+so a uniform drop gives K = dtau sqrt(pi L/2) (half-length L/2).  Both lie in one solid on both sides of the
+interface, as the identical-solid scenes are.  The energy release rate is G(L) = 1/2 H(0) K^2 with H(0) the
+static mode II compliance of the block's Born continuum (signed, 1/2 H(0) K |K|: a crack pushed back, K < 0,
+does not count as driven) (``cracks.mode2_compliance``: (1 - nu)/mu for an isotropic solid).  The front
+stops where G falls to the fracture energy Gamma: the predicted arrest is the first L, past the first one at
+which G reached Gamma, where G < Gamma again.  The plane has no height: the prediction holds for L below the
+block's height H; a longer crack in a block of finite height releases more than the plane's G (the block's
+bending adds to it), so there the prediction is short of a lattice that follows the continuum.
 
   edge_factor(s)                       F(s)
   edge_k(drop, L)                      K(L) for a drop sampled at the sites (one per spacing a; L in a)
-  release_curve(drop, H0)              signed G at every L = 1..len(drop) sites
+  interior_k(drop, L)                  K(L) at the leading tip of the interior crack, drop from its trailing tip
+  release_curve(drop, H0, geometry)    signed G at every L = 1..len(drop) sites ("edge" or "interior")
   predicted_length(G, gamma)           the first L where G falls back below gamma (sites); NaN or len(G)
   arrest_prediction(run, precursor)    the prediction for one of run.precursors(), with its inputs
 
@@ -64,11 +73,26 @@ def edge_k(drop, L: float) -> float:
     return float(2.0 * math.sqrt(L / math.pi) * np.sum(_W * drop[idx] * edge_factor(s)))
 
 
-def release_curve(drop, H0: float) -> np.ndarray:
-    """G(L) = 1/2 H0 K(L) |K(L)| at L = 1, 2, ..., len(drop) sites (H0 the static mode II compliance): signed,
-    so that a crack whose faces are pushed back (K < 0, a drop that turned negative ahead) reads G < 0 rather
-    than the release of a crack loaded the other way."""
-    K = np.array([edge_k(drop, L) for L in range(1, len(drop) + 1)])
+def interior_k(drop, L: float) -> float:
+    """K(L) = 2 sqrt(2L/pi) int_0^{pi/2} dtau(L sin^2 th) sin^2 th d th at the leading tip of a crack on an
+    unbounded interface whose trailing tip is at s = 0: ``drop[i]`` holds on i <= s < i + 1 (s in a from the
+    trailing tip); stress sqrt(a).  The substitution s = L sin^2 th removes the (L - s)^-1/2 of the tip."""
+    drop = np.asarray(drop, float)
+    s2 = np.sin(_TH) ** 2
+    idx = np.minimum((L * s2).astype(int), len(drop) - 1)
+    return float(2.0 * math.sqrt(2.0 * L / math.pi) * np.sum(_W * drop[idx] * s2))
+
+
+GEOMETRIES = {"edge": edge_k, "interior": interior_k}
+
+
+def release_curve(drop, H0: float, geometry: str = "edge") -> np.ndarray:
+    """G(L) = 1/2 H0 K(L) |K(L)| at L = 1, 2, ..., len(drop) sites (H0 the static mode II compliance), K of the
+    edge crack or of the interior crack (``GEOMETRIES``): signed, so that a crack whose faces are pushed back
+    (K < 0, a drop that turned negative ahead) reads G < 0 rather than the release of a crack loaded the
+    other way."""
+    k = GEOMETRIES[geometry]
+    K = np.array([k(drop, L) for L in range(1, len(drop) + 1)])
     return 0.5 * H0 * K * np.abs(K)
 
 
@@ -90,12 +114,13 @@ def _frame(t, time: float, after: bool) -> int:
 
 
 def arrest_prediction(run, pre) -> dict:
-    """The arrest fracture mechanics predicts for precursor ``pre`` (``run.precursors()``) from the edge it
-    started at: {"L_measured", "L_predicted" (a), "tau_r" (rho c_r^2, the mean traction over the slipped
-    stretch in the first frame after the arrest), "Gamma" (m c_r^2 / a, the mean stored energy of its breaks,
-    ``cracks.gamma_run``), "G_at_arrest_over_Gamma" (the half-plane G at the measured length over Gamma),
-    "from_edge" (whether it started within ``edge_sites`` of the contact's edge it runs away from)}.  A front
-    that nucleated inside the contact is not an edge crack: its predictions are NaN."""
+    """The arrest fracture mechanics predicts for precursor ``pre`` (``run.precursors()``): {"L_measured",
+    "L_predicted" (a), "tau_r" (rho c_r^2, the mean traction over the slipped stretch in the first frame after
+    the arrest), "Gamma" (m c_r^2 / a, the mean stored energy of its breaks, ``cracks.gamma_run``),
+    "G_at_arrest_over_Gamma" (the static G at the measured length over Gamma), "from_edge" (whether it started
+    within ``edge_sites`` of the contact's edge it runs away from), "geometry" ("edge": the edge crack from
+    that edge; "interior": the crack from its nucleation site, module docstring)}.  NaN predictions where the
+    front's breaks carry no Gamma."""
     iface, ns = run.interface, len(run.x)
     t = np.asarray(iface["t"], float)
     d = pre.front.direction if pre.front.direction != 0 else 1
@@ -103,23 +128,26 @@ def arrest_prediction(run, pre) -> dict:
     n0 = int(np.argmin(np.abs(run.x - pre.nucleation_x)))
     depth = n0 if d > 0 else ns - 1 - n0
     L_meas = pre.arrest_length * ns
+    edge = depth < edge_sites(ns)
     out = {"L_measured": L_meas, "L_predicted": math.nan, "tau_r": math.nan, "Gamma": math.nan,
-           "G_at_arrest_over_Gamma": math.nan, "from_edge": depth < edge_sites(ns)}
+           "G_at_arrest_over_Gamma": math.nan, "from_edge": edge, "geometry": "edge" if edge else "interior"}
     before = np.asarray(iface["sxy"][_frame(t, pre.nucleation_time, False)], float)[order]
     after = np.asarray(iface["sxy"][_frame(t, pre.arrest_time, True)], float)[order]
     sign = 1.0 if before.sum() >= 0 else -1.0                   # the load's sense: dtau > 0 drives the front
+    if not edge:                                                # the interior crack's faces: from its nucleation on
+        before, after = before[depth:], after[depth:]
     n = max(int(round(L_meas)), 1)
     tau_r = float(np.mean(sign * after[:n]))
     g = np.asarray(gamma_run(run, pre.front)["Gamma"], float)
     gamma = float(np.nanmean(g)) if np.isfinite(g).any() else math.nan
     out.update(tau_r=tau_r, Gamma=gamma)
-    if not out["from_edge"] or not math.isfinite(gamma):
+    if not math.isfinite(gamma):
         return out
     m = _material(run)
     c_r = float(run.attrs["c_r"])
     scale = DENSITY * c_r * c_r                                 # rho c_r^2 -> internal stress
     H0 = mode2_compliance(0.0, m.kn_top, m.kt_top)
-    G = release_curve((sign * before - tau_r) * scale, H0) / c_r ** 2
+    G = release_curve((sign * before - tau_r) * scale, H0, out["geometry"]) / c_r ** 2
     out["L_predicted"] = predicted_length(G, gamma)
     out["G_at_arrest_over_Gamma"] = float(G[min(n, len(G)) - 1] / gamma)
     return out

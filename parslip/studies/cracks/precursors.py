@@ -34,9 +34,10 @@ from . import points, sweeps, write
 READING_COLS = ["bottom_kn", "damping", "zeta", "contact"]
 RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
             "n_from_edge", "n_over_3_lambda", "min_length_over_lambda", "max_length_over_lambda",
-            "median_width_over_lambda", "Lambda", "slope", "intercept", "r2", "n_fit", "median_pred_over_measured"] + READING_COLS
-ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "nucleation_x", "arrest_time",
-               "mu_arrest", "length_over_lambda", "width_over_lambda", "predicted_over_lambda",
+            "median_width_over_lambda", "Lambda", "slope", "intercept", "r2", "n_fit",
+            "median_pred_over_measured"] + READING_COLS
+ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "geometry", "nucleation_x",
+               "arrest_time", "mu_arrest", "length_over_lambda", "width_over_lambda", "predicted_over_lambda",
                "G_over_Gamma_at_arrest", "tau_r", "Gamma"] + READING_COLS
 HEIGHTS = ("low", "mid", "high", "face")
 # The front detector's patience in a/c_r: its default (``fronts.MAX_GAP`` = 3 l/c_r) was set on l = 100 a; on a
@@ -84,7 +85,8 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
                         "width_over_lambda": p.front.width / lam,
                         "predicted_over_lambda": pred["L_predicted"] / lam,
                         "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r": pred["tau_r"],
-                        "Gamma": pred["Gamma"], "from_edge": pred["from_edge"]})
+                        "Gamma": pred["Gamma"], "from_edge": pred["from_edge"],
+                        "geometry": pred["geometry"]})
     L = [a["length_over_lambda"] for a in arrests]
     ratio = [a["predicted_over_lambda"] / a["length_over_lambda"] for a in arrests
              if math.isfinite(a["predicted_over_lambda"])]
@@ -153,25 +155,26 @@ def length_figure(arrests, fit, img, source):
 
 def prediction_figure(arrests, img, source):
     """Left: the predicted arrest against the measured one, where G reached Gamma; right: G/Gamma at the
-    measured arrest for every precursor from the edge (LEFM puts it at 1)."""
+    measured arrest for every precursor (LEFM puts it at 1).  Filled: edge cracks; open: interior ones."""
     plt = pyplot()
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 4))
-    edge = [a for a in arrests if a["from_edge"]]
-    pts = [a for a in edge if math.isfinite(a["predicted_over_lambda"])]
+    pts = [a for a in arrests if math.isfinite(a["predicted_over_lambda"])]
     for rd, mk, c in (("current", "o", "C0"), ("zero", "s", "C1")):
-        sel = [a for a in pts if a["reading"] == rd]
-        if sel:
-            ax.plot([a["length_over_lambda"] for a in sel], [a["predicted_over_lambda"] for a in sel], mk,
-                    color=c, mfc="none", label=f'"{rd}" ({len(sel)})')
-        sel = [a for a in edge if a["reading"] == rd and math.isfinite(a["G_over_Gamma_at_arrest"])]
-        if sel:
-            bx.plot([a["length_over_lambda"] for a in sel], [a["G_over_Gamma_at_arrest"] for a in sel], mk,
-                    color=c, mfc="none", label=f'"{rd}" ({len(sel)})')
+        for geo, fill in (("edge", c), ("interior", "none")):
+            sel = [a for a in pts if a["reading"] == rd and a["geometry"] == geo]
+            if sel:
+                ax.plot([a["length_over_lambda"] for a in sel], [a["predicted_over_lambda"] for a in sel], mk,
+                        color=c, mfc=fill, label=f'"{rd}", {geo} ({len(sel)})')
+            sel = [a for a in arrests if a["reading"] == rd and a["geometry"] == geo
+                   and math.isfinite(a["G_over_Gamma_at_arrest"])]
+            if sel:
+                bx.plot([a["length_over_lambda"] for a in sel], [a["G_over_Gamma_at_arrest"] for a in sel], mk,
+                        color=c, mfc=fill, label=f'"{rd}", {geo} ({len(sel)})')
     top = max([a["length_over_lambda"] for a in pts] + [a["predicted_over_lambda"] for a in pts] + [1.0])
     ax.plot([0, top], [0, top], "k-", lw=0.6)
     ax.set_xlabel("measured arrest length / Lambda")
     ax.set_ylabel("predicted (G falls to Gamma) / Lambda")
-    ax.set_title(f"{len(pts)} of {len(edge)} edge precursors reach G = Gamma", fontsize=8)
+    ax.set_title(f"{len(pts)} of {len(arrests)} precursors reach G = Gamma", fontsize=8)
     bx.axhline(1.0, color="k", lw=0.6)
     bx.set_xlabel("measured arrest length / Lambda")
     bx.set_ylabel("static G / Gamma at the measured arrest")
