@@ -46,19 +46,24 @@ def _one_kernel_cache_for_the_session() -> None:
 _one_kernel_cache_for_the_session()
 
 # Kernel variants the tests use that the first test file (one rank, float64, in this process) does not
-# compile: the time loop on several ranks, and in float32.  Each scene is SMALL for 0.1 l/c_r.
-WARM_UPS = ((2, ()), (1, ("--set", "time.precision=float32")))
+# compile: the time loop in float32, then on several ranks, one after the other.  Each scene is SMALL for
+# 0.1 l/c_r.
+WARM_UPS = ((1, ("--set", "time.precision=float32")), (2, ()))
 _warming = []
 
 
 def pytest_sessionstart(session):
     """Fill the kernel cache in the background while pytest collects and the first tests run.
 
-    On a cold cache (a fresh clone) the first run of each loop variant compiles it, about 130 s of a
-    core.  Left to the tests, the multi-rank variant is compiled by every rank of the first MPI test
-    at once (three ranks on two cores), under that test's hard time limit, after the one-rank variant
-    was compiled on one core while the other idled.  Started here, the compiles overlap collection
-    and the first in-process tests instead; on a warm cache each warm-up only loads the loop.  A test
+    On a cold cache (a fresh clone) the first run of each loop variant compiles it: about 150 s of a
+    core for one rank in float64 (the first test, in this process), 135 s for float32, and 30 s per
+    rank for the multi-rank variant once the one-rank kernels are in the cache (each rank compiles the
+    exchange's specialisations; from a cold cache every rank compiles everything, 150 s each).  Left
+    to the tests, the multi-rank variant is compiled by every rank of the first MPI test at once
+    (three ranks on two cores), under that test's hard time limit.  Started here, in one chain on the
+    core the first test leaves free, float32 first and the ranks when most of the one-rank kernels
+    are stored: on this 2-core machine started together they took 365 s of the first test's wall
+    time, in a chain about 160 s.  On a warm cache each warm-up only loads the loop.  A test
     that needs a variant before its warm-up has stored it compiles it as before, so the warm-ups
     change no result and no test waits for them.  Started for the suite or a folder of it only: a run
     of chosen test files needs some of these variants at most, and a warm-up it does not need would
@@ -73,14 +78,15 @@ def pytest_sessionstart(session):
     chosen = [a for a in session.config.args if not os.path.isdir(a)]
     if chosen or "_PYTEST_MPI_CHILD_PROCESS" in os.environ or not WHEEL_MPIEXEC:
         return
+    import shlex
     d = tempfile.mkdtemp(prefix="parslip-warm-")
     sc = os.path.join(d, "warm.toml")
     with open(sc, "w") as fh:
         fh.write(small_toml(**{"drive.duration": 0.1, "output.snapshots": 0}))
-    for k, (n, sets) in enumerate(WARM_UPS):
-        cmd = cli_command(n, "run", sc, "--out", os.path.join(d, f"w{k}.vtkhdf"), "--no-png", "--quiet", *sets)
-        _warming.append(subprocess.Popen(cmd, env=cli_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                         start_new_session=True))
+    chain = "; ".join(shlex.join(cli_command(n, "run", sc, "--out", os.path.join(d, f"w{k}.vtkhdf"), "--no-png",
+                                             "--quiet", *sets)) for k, (n, sets) in enumerate(WARM_UPS))
+    _warming.append(subprocess.Popen(["sh", "-c", chain], env=cli_env(), stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL, start_new_session=True))
     _warming.append(lambda: shutil.rmtree(d, ignore_errors=True))
 
 
