@@ -6,9 +6,10 @@ and both readings of a re-formed bond's rest offset (``interface.reform_x0`` "ze
 detector's patience ``max_gap`` = 300 a/c_r, as on l = 100), its
 length in units of Lambda (``analysis.cracks.process_zone``, the Palmer-Rice length), F_T/F_N at its arrest
 (mu at the first frame after its tip's last advance) and the arrest fracture mechanics predicts for it
-(``analysis.arrest.arrest_prediction``).  Per reading and height, the straight line L/Lambda = slope *
-F_T/F_N + intercept through the precursors of both normal loads, with its r^2 (Katano et al. 2014 find one
-line per regime whatever the height; Rubinstein et al. 2007 one per loading configuration).
+(``analysis.arrest.arrest_prediction``).  Per reading, height and re-formation delay (``interface.heal_time``,
+swept by ``cracks_precursors_heal.toml``), the straight line L/Lambda = slope * F_T/F_N + intercept through
+the precursors of both normal loads, with its r^2 (Katano et al. 2014 find one line per regime whatever the
+height; Rubinstein et al. 2007 one per loading configuration).
 
 Tables: ``cracks_precursors.csv`` a row per run (``n_precursors``, ``min_length_over_lambda``, the height's
 ``slope`` and ``r2``), ``cracks_precursors_arrests.csv`` a row per precursor (measured and predicted
@@ -32,11 +33,13 @@ from . import points, sweeps, write
 # The readings this study departs from the defaults in, named so that the tables declare them: the matched
 # pair's substrate stiffness, the damping's form and rate, the contact under unbonded sites.
 READING_COLS = ["bottom_kn", "damping", "zeta", "contact"]
-RUN_COLS = ["point", "reading", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
+RUN_COLS = ["sweep", "point", "reading", "F_N", "height", "rows", "heal_time", "n_fronts", "n_crossed", "n_merged",
+            "n_precursors",
             "n_from_edge", "n_over_3_lambda", "min_length_over_lambda", "max_length_over_lambda",
             "median_width_over_lambda", "Lambda", "slope", "intercept", "r2", "n_fit",
             "median_pred_over_measured"] + READING_COLS
-ARREST_COLS = ["point", "reading", "F_N", "height", "precursor", "kind", "from_edge", "geometry", "nucleation_x",
+ARREST_COLS = ["sweep", "point", "reading", "F_N", "height", "heal_time", "precursor", "kind", "from_edge",
+               "geometry", "nucleation_x",
                "arrest_time", "mu_arrest", "length_over_lambda", "width_over_lambda", "predicted_over_lambda",
                "G_over_Gamma_at_arrest", "tau_r", "Gamma"] + READING_COLS
 HEIGHTS = ("low", "mid", "high", "face")
@@ -71,7 +74,8 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
     s = run.scene
     lam = process_zone(run)
     ns = len(run.x)
-    head = {"point": row["point"], "reading": s["interface.reform_x0"], "F_N": float(s["load.FN"]),
+    head = {"sweep": row.get("sweep", ""), "point": row["point"], "reading": s["interface.reform_x0"],
+            "F_N": float(s["load.FN"]), "heal_time": float(s["interface.heal_time"]),
             "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])),
             "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "scene": row["scene"],
             "commit": row["commit"], "bottom_kn": s["material.bottom_kn"], "damping": s["time.damping"],
@@ -80,7 +84,8 @@ def run_arrests(row, run) -> tuple[dict, list[dict]]:
     arrests = []
     for i, p in enumerate(run.precursors(max_gap=max_gap(run))):
         pred = arrest_prediction(run, p)
-        arrests.append({**head, "precursor": i, "kind": p.kind, "nucleation_x": p.nucleation_x, "arrest_time": p.arrest_time,
+        arrests.append({**head, "precursor": i, "kind": p.kind, "nucleation_x": p.nucleation_x,
+                        "arrest_time": p.arrest_time,
                         "mu_arrest": _mu_at(run, p.arrest_time), "length_over_lambda": p.arrest_length * ns / lam,
                         "width_over_lambda": p.front.width / lam,
                         "predicted_over_lambda": pred["L_predicted"] / lam,
@@ -112,12 +117,16 @@ def line_fit(x, y) -> dict:
             math.nan, "n_fit": len(x)}
 
 
+def group(a: dict) -> tuple:
+    """What one fit spans: a reading, a height and a re-formation delay, over the normal loads."""
+    return a["reading"], a["height"], a["heal_time"]
+
+
 def fits(arrests: list[dict]) -> dict:
-    """(reading, height) -> ``line_fit`` of length_over_lambda against mu_arrest over both normal loads."""
-    keys = sorted({(a["reading"], a["height"]) for a in arrests})
-    return {k: line_fit([a["mu_arrest"] for a in arrests if (a["reading"], a["height"]) == k],
-                        [a["length_over_lambda"] for a in arrests if (a["reading"], a["height"]) == k])
-            for k in keys}
+    """``group`` -> ``line_fit`` of length_over_lambda against mu_arrest over both normal loads."""
+    keys = sorted({group(a) for a in arrests})
+    return {k: line_fit([a["mu_arrest"] for a in arrests if group(a) == k],
+                        [a["length_over_lambda"] for a in arrests if group(a) == k]) for k in keys}
 
 
 def length_figure(arrests, fit, img, source):
@@ -127,19 +136,20 @@ def length_figure(arrests, fit, img, source):
     colors = dict(zip(HEIGHTS, ("C0", "C1", "C2", "C3")))
     for ax, rd in zip(axes[0], readings):
         mine = [a for a in arrests if a["reading"] == rd]
-        for (r, h), f in fit.items():
+        for k, ((r, h, ht), f) in enumerate(fit.items()):
             if r != rd:
                 continue
-            sel = [a for a in mine if a["height"] == h]
+            sel = [a for a in mine if group(a) == (r, h, ht)]
+            c = colors[h] if ht == 0 else f"C{4 + k % 6}"
+            name = h if ht == 0 else f"{h}, heal_time {ht:g}"
             for fn, mk in zip(sorted({a["F_N"] for a in sel}), "os^"):
                 pts = [a for a in sel if a["F_N"] == fn]
-                ax.plot([a["mu_arrest"] for a in pts], [a["length_over_lambda"] for a in pts], mk, color=colors[h],
-                        mfc="none" if fn != max(a["F_N"] for a in sel) else colors[h],
-                        label=f"{h}, F_N = {fn:g}")
+                ax.plot([a["mu_arrest"] for a in pts], [a["length_over_lambda"] for a in pts], mk, color=c,
+                        mfc="none" if fn != max(a["F_N"] for a in sel) else c, label=f"{name}, F_N = {fn:g}")
             if math.isfinite(f["slope"]):
                 xs = np.linspace(min(a["mu_arrest"] for a in sel), max(a["mu_arrest"] for a in sel), 50)
                 ys = f["slope"] * xs + f["intercept"]
-                ax.plot(xs[ys > 0], ys[ys > 0], "-", color=colors[h], lw=0.8)
+                ax.plot(xs[ys > 0], ys[ys > 0], "-", color=c, lw=0.8)
         ax.axhline(3.0, color="k", ls=":", lw=0.8)
         ax.set_yscale("log")
         if not mine:
@@ -192,13 +202,13 @@ def tabulate(runs: str, img: str, tables: str) -> str:
         for row, run in points(d):
             if run is None:
                 continue
-            r, a = run_arrests(row, run)
+            r, a = run_arrests({**row, "sweep": os.path.basename(d)}, run)
             rows.append(r)
             arrests += a
     fit = fits(arrests)
     nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
     for r in rows:
-        r.update(fit.get((r["reading"], r["height"]), nan))
+        r.update(fit.get(group(r), nan))
     table.write_csv(os.path.join(tables, "cracks_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
                     arrests)
     source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
