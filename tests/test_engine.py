@@ -253,3 +253,26 @@ def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
     (copy / "engine" / "kernels" / "interface.py").write_text(
         (copy / "engine" / "kernels" / "interface.py").read_text() + "\n# a change\n")
     assert where() != first
+
+
+@pytest.mark.parametrize("mode,rows", [("push", ()), ("push", (1, 2)), ("pull", ()), ("shear", ()), ("none", ())])
+def test_the_memory_prediction_counts_the_frame_buffer_the_engine_holds(mode, rows):
+    """``scene.memory.frame_bytes`` against the engine's own frame arrays (one rank), and its count of a
+    slab's driven nodes (``driven_owned``, closed form) against ``Lattice.kinds`` over every slab of a
+    split into 1 to 4 column ranges."""
+    from parslip.model.lattice import DRIVEN
+    from parslip.scene import memory
+    sim = simulation(SMALL, **{"drive.mode": mode, "drive.rows": list(rows)})
+    st, fr = sim.setup, sim.frames
+    held = sum(a.nbytes for name, a in zip(fr._fields, fr) if name != "cursor")
+    sites = fr.intact.shape[1]
+    assert held == memory.frame_bytes(sim.buffer_frames, sites, fr.fdrive.shape[1])
+    lat = st.lattice
+    for n in range(1, 5):
+        cuts = np.linspace(0, lat.ncols, n + 1).astype(int)
+        for c0, c1 in zip(cuts[:-1], cuts[1:]):
+            nodes = lat.nodes_in_columns(int(c0), int(c1))
+            want = int((lat.kinds(nodes, mode, rows) == DRIVEN).sum())
+            assert memory.driven_owned(lat, mode, rows, int(c0), int(c1)) == want, (mode, rows, c0, c1)
+    if mode != "none":
+        assert fr.fdrive.shape[1] == memory.driven_owned(lat, mode, rows, 0, lat.ncols) > 0
