@@ -276,3 +276,26 @@ def test_the_memory_prediction_counts_the_frame_buffer_the_engine_holds(mode, ro
             assert memory.driven_owned(lat, mode, rows, int(c0), int(c1)) == want, (mode, rows, c0, c1)
     if mode != "none":
         assert fr.fdrive.shape[1] == memory.driven_owned(lat, mode, rows, 0, lat.ncols) > 0
+
+
+def test_a_runaway_at_an_interface_site_without_contact_names_the_sinking():
+    """A runaway flagged at an interface site of a run without contact names the sinking as a cause (a block
+    under F_N whose bonds broke has nothing holding it up; at l = 500 under F_N = 30 that ended a run which
+    completes with a contact), with the command that adds one; in the bulk, or with a contact, it does not."""
+    from parslip.engine import loop as L
+    from parslip.parallel.layout import PAD
+
+    def message(row, block=TOP, **over):
+        sim = simulation(SMALL, **over)
+        f = np.zeros(L.L_SIZE, np.int64)
+        f[[L.L_BITS, L.L_STEP, L.L_BLOCK, L.L_ROW, L.L_COL, L.L_VALUE]] = (
+            L.FLAG_RUNAWAY, 100, block, row + PAD, sim.setup.lattice.top.col0 + 3, 500_000)
+        return sim._describe_node(f, 1.0)
+
+    top_site = message(0)
+    assert "moved 0.5 a in one step" in top_site and "a time step above the stability limit" in top_site
+    assert "interface.contact = 0" in top_site and "--set interface.contact=0.3" in top_site
+    rows = SMALL["lattice.bottom_rows"]
+    assert "interface.contact = 0" in message(rows - 1, block=BOTTOM)
+    assert "interface.contact" not in message(1)
+    assert "interface.contact" not in message(0, **{"interface.contact": 0.3})
