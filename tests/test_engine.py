@@ -257,9 +257,9 @@ def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
 
 @pytest.mark.parametrize("mode,rows", [("push", ()), ("push", (1, 2)), ("pull", ()), ("shear", ()), ("none", ())])
 def test_the_memory_prediction_counts_the_frame_buffer_the_engine_holds(mode, rows):
-    """``scene.memory.frame_bytes`` against the engine's own frame arrays (one rank), and its count of a
-    slab's driven nodes (``driven_owned``, closed form) against ``Lattice.kinds`` over every slab of a
-    split into 1 to 4 column ranges."""
+    """``scene.memory.frame_bytes`` against the engine's own frame arrays (one rank), and the count of a
+    slab's driven nodes it uses (``Lattice.driven_in_columns``, closed form) against ``Lattice.kinds`` over
+    every slab of a split into 1 to 4 column ranges."""
     from parslip.model.lattice import DRIVEN
     from parslip.scene import memory
     sim = simulation(SMALL, **{"drive.mode": mode, "drive.rows": list(rows)})
@@ -273,9 +273,9 @@ def test_the_memory_prediction_counts_the_frame_buffer_the_engine_holds(mode, ro
         for c0, c1 in zip(cuts[:-1], cuts[1:]):
             nodes = lat.nodes_in_columns(int(c0), int(c1))
             want = int((lat.kinds(nodes, mode, rows) == DRIVEN).sum())
-            assert memory.driven_owned(lat, mode, rows, int(c0), int(c1)) == want, (mode, rows, c0, c1)
+            assert lat.driven_in_columns(mode, rows, int(c0), int(c1)) == want, (mode, rows, c0, c1)
     if mode != "none":
-        assert fr.fdrive.shape[1] == memory.driven_owned(lat, mode, rows, 0, lat.ncols) > 0
+        assert fr.fdrive.shape[1] == lat.driven_in_columns(mode, rows, 0, lat.ncols) > 0
 
 
 def test_a_runaway_at_an_interface_site_without_contact_names_the_sinking():

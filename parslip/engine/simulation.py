@@ -471,12 +471,12 @@ class Simulation:
         if (st.omega_max, st.omega_method) in CACHE_HITS:
             cause += f"; omega_max was read from the disk cache in {cache_dir()}: delete it if in doubt"
         site_row = r == 0 if b == TOP else r == lat.bottom.rows - 1
-        if lat.has_interface and site_row and not st.scene["interface.contact"] > 0:
+        if lat.has_interface and site_row and st.law.contact == 0:
             # Seen at l = 500 under F_N = 30: the bonds broke, nothing held the block up, it sank into the
             # substrate and a site met it in one step; the same run with a contact ends normally.
             cause += ("; or, at this interface site: a site whose bond broke feels no contact "
                       "(interface.contact = 0), so under F_N the block can sink into the substrate until a site "
-                      f"meets it; rerun with a contact, e.g. --set interface.contact={st.scene['interface.ky']:g}")
+                      f"meets it; rerun with a contact, e.g. --set interface.contact={st.law.ky:g}")
         if f[L.L_BITS] & L.FLAG_NONFINITE:
             return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) at {node}; "
                     f"likely cause: {cause}")

@@ -186,6 +186,18 @@ class Lattice:
             kind[top & (nodes["row"] == t.rows - 1)] = DRIVEN
         return kind
 
+    def driven_in_columns(self, mode: str, rows, c0: int, c1: int) -> int:
+        """How many nodes ``kinds`` marks DRIVEN among the global columns c0 <= col < c1, in closed form (no
+        node list: ``scene.memory`` counts a rank's before anything is built)."""
+        t = self.top
+        if mode == "shear":
+            return max(min(c1, t.col0 + t.cols) - max(c0, t.col0), 0)
+        if mode in ("push", "pull"):
+            col = t.col0 if mode == "push" else t.col0 + t.cols - 1
+            n = (min(rows[1], t.rows - 1) - rows[0] + 1) if rows else t.rows
+            return max(n, 0) if c0 <= col < c1 else 0
+        return 0
+
     def is_top_site(self, nodes) -> np.ndarray:
         return self.has_interface & (nodes["block"] == TOP) & (nodes["row"] == 0)
 

@@ -74,16 +74,14 @@ def _frozen(st) -> list[str]:
     if zeta <= 0 or h <= 0:
         return []
     cross = mat.c_s / h
+    rate = damping.mode_rate(math.pi * cross, mat.kn_top)
+    if rate <= cross:
+        return []
     if damping.rated:
-        rate = damping.mode_rate(math.pi * cross, mat.kn_top)
-        if rate <= cross:
-            return []
         return [f"time.zeta = {zeta:g} with time.damping = 'bonds': the dashpots damp the slowest wave across the "
                 f"block's height (omega = pi c_s/H, H = {h:.3g} a) at beta omega^2 = {rate:.3g} c/a, faster than "
                 f"it crosses (c_s/H = {cross:.3g} c/a): the block is frozen; for a dynamic block use "
                 f"time.zeta < k_n H/(pi^2 c_s) = {mat.kn_top * h / (math.pi ** 2 * mat.c_s):.3g}"]
-    if 1.0 / zeta >= h / mat.c_s:
-        return []
     return [f"time.zeta = {zeta:g}: the damping time 1/zeta = {1 / zeta:.3g} a/c is shorter than the "
             f"{h / mat.c_s:.3g} a/c a shear wave needs to cross the block's height (H/c_s, H = {h:.3g} a): waves "
             f"die before they reach the interface, stress diffuses across H in about zeta H^2/c_s^2 = "

@@ -58,20 +58,6 @@ def frame_buffer(nsites: int, n_frames: int) -> int:
     return int(min(max(16, FRAME_BUFFER_BYTES // per_frame), n_frames))
 
 
-def driven_owned(lat, mode: str, rows, c0: int, c1: int) -> int:
-    """OWNED driven nodes of a rank holding the global columns c0 <= col < c1 (``Lattice.kinds`` in closed
-    form, without the nodes): the top row's columns under shear, the rear (push) or front (pull) face's
-    rows, ``rows`` = (first, last) of them if given; none otherwise."""
-    t = lat.top
-    if mode == "shear":
-        return max(min(c1, t.col0 + t.cols) - max(c0, t.col0), 0)
-    if mode in ("push", "pull"):
-        col = t.col0 if mode == "push" else t.col0 + t.cols - 1
-        n = (min(rows[1], t.rows - 1) - rows[0] + 1) if rows else t.rows
-        return max(n, 0) if c0 <= col < c1 else 0
-    return 0
-
-
 def frame_bytes(capacity: int, sites: int, driven: int) -> int:
     """Bytes of a rank's interface frame buffer (``engine.loop.Frames``): ``capacity`` frames of its ``sites``
     OWNED sites, its ``driven`` OWNED driven nodes, the frame's step and the energy budget's terms."""
@@ -104,8 +90,7 @@ def predict_rank(setup, rank: int, ranks: int, gather: bool = True) -> int:
     owned = int(lat.col_start[c1] - lat.col_start[c0])
     sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
     widest = int(owned_site_counts(lat, lay.bounds).max())      # every rank's buffer holds as many frames
-    drive = setup.drive
-    driven = driven_owned(lat, drive.mode, drive.rows, c0, c1) if drive.on else 0
+    driven = lat.driven_in_columns(setup.drive.mode, setup.drive.rows, c0, c1)
     frames = frame_bytes(frame_buffer(widest, setup.n_frames), sites, driven)
     events = event_room(sites, setup.scene["output.buffer_events"])[1] * EVENT_BYTES
     persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames + events
