@@ -82,6 +82,7 @@ import math
 
 import numpy as np
 
+from ..model.damping import Damping
 from ..model.lattice import DIRECTIONS
 from ..model.physics import DENSITY
 from .fronts import front_field, tip_values
@@ -382,9 +383,16 @@ def _bonds(run, geo, snap) -> dict:
     d0[:, 1] = -float(run.scene["interface.delta0"])
     out = {"i": np.concatenate([geo.bulk[:, 0], iface[:, 0]]), "j": np.concatenate([geo.bulk[:, 1], iface[:, 1]]),
            "K": np.concatenate([geo.K, Ki]), "d0": np.concatenate([geo.d0, d0])}
-    if run.scene.get("time.damping", "absolute") == "bonds":
-        out["beta"] = np.concatenate([float(run.scene["time.zeta"]) / geo.kn, np.zeros(len(iface))])
+    damping = _damping(run)
+    if damping.rated:
+        out["beta"] = np.concatenate([damping.beta(geo.kn), np.zeros(len(iface))])
     return out
+
+
+def _damping(run) -> Damping:
+    """The run's damping (``model.damping``), from its scene."""
+    s = run.scene
+    return Damping(zeta=float(s.get("time.zeta", 0.0)), form=s.get("time.damping", "absolute"))
 
 
 def route1_blocker(run) -> tuple | None:
@@ -415,7 +423,7 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     lam, st = process_zone(run), steady_stretch(front)
     c_r, dt, l = float(run.attrs["c_r"]), float(run.attrs["dt"]), float(run.attrs["l"])
     # The body drag's rate; the bonds' dashpots travel with the bonds (``_bonds``).
-    zeta = float(run.scene.get("time.zeta", 0.0)) if run.scene.get("time.damping", "absolute") == "absolute" else 0.0
+    zeta = _damping(run).drag
     times = np.asarray(run.snapshot_times, float)
     inside = np.flatnonzero((times >= st["t0"]) & (times <= st["t1"]))
     geo = _LatticeGeometry(run) if len(inside) else None

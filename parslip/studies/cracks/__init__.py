@@ -42,6 +42,12 @@ def points(sweep_dir: str):
         yield row, (Run(path) if row.get("out") and os.path.exists(path) else None)
 
 
+def provenance(rows: list[dict]) -> dict:
+    """The provenance a figure drawn from ``rows`` is stamped with (``plot.figures.save``): their scenes and
+    commits."""
+    return {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+
+
 def write(rows: list[dict], cols: list[str], path: str) -> str:
     """``cols`` then ``scene`` and ``commit`` to the CSV at ``path``; returns the Markdown table of ``cols``."""
     table.write_csv(path, cols + ["scene", "commit"], rows)
@@ -55,4 +61,8 @@ def tabulate(study: str, runs: str, img: str, tables: str) -> str:
     os.makedirs(img, exist_ok=True)
     os.makedirs(tables, exist_ok=True)
     mod = importlib.import_module(f"parslip.studies.cracks.{study}")
-    return mod.tabulate(runs, img, tables)
+    md = mod.tabulate(runs, img, tables)
+    # The page shows the PNGs; ``save`` also writes PDFs, which the docs do not keep.
+    for f in glob.glob(os.path.join(img, f"cracks_{study}_*.pdf")):
+        os.remove(f)
+    return md

@@ -20,7 +20,7 @@ import numpy as np
 from parslip.analysis import cracks as gmeasures, table
 from parslip.analysis.fronts import wave_speeds
 from parslip.plot.figures import pyplot, save
-from parslip.studies.cracks import points, sweeps, write
+from parslip.studies.cracks import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "v0", "top_rows",
         "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner",
@@ -175,12 +175,9 @@ def tabulate(runs: str, img: str, tables: str) -> str:
     """cracks_energy.csv (every measurable front), the two figures, and the Markdown the page quotes (the
     first fronts' rows and ``summary``)."""
     rows = rows_of(runs)
-    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    source = provenance(rows)
     write(rows, COLS, os.path.join(tables, "cracks_energy.csv"))
     shown = table.markdown([r for r in rows if r["first"]], SHOWN)           # the page lists the first fronts
     energy_figure(rows, img, source)
     gap_figure(rows, img, source)
-    for f in os.listdir(img):
-        if f.startswith("cracks_energy_") and f.endswith(".pdf"):
-            os.remove(os.path.join(img, f))
     return shown + "\n\n" + summary(rows)

@@ -25,7 +25,7 @@ import numpy as np
 from parslip.analysis.friction import first_crossing, reformations, sinking
 from parslip.plot.figures import pyplot, save
 
-from . import points, sweeps, write
+from . import points, provenance, sweeps, write
 
 # The columns of cracks_healing.csv (then scene and commit).
 COLS = ["sweep", "point", "l", "rows", "drive.mode", "drive.v0", "swept", "value", "contact", "kind", "mean v",
@@ -135,12 +135,9 @@ def tabulate(runs: str, img: str, tables: str) -> str:
                 colour = f"C{SINK_DRAWN.index(r['value']) + 2 * SINK_SWEEPS.index(stem)}"
                 curves.append((f"l = {r['l']:g} a, heal_time {r['value']:g}, contact {r['contact']:g}", run.times,
                                sinking(run), colour, r["contact"] == 0))
-    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    source = provenance(rows)
     md = write(rows, COLS, os.path.join(tables, "cracks_healing.csv"))
     if curves:
         sink_figure(curves, img, source)
     fronts_figure(rows, img, source)
-    for f in os.listdir(img):
-        if f.startswith("cracks_healing_") and f.endswith(".pdf"):
-            os.remove(os.path.join(img, f))
     return md

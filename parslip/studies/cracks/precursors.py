@@ -28,7 +28,7 @@ from parslip.analysis.arrest import arrest_prediction
 from parslip.analysis.cracks import process_zone
 from parslip.plot.figures import pyplot, save
 
-from . import points, sweeps, write
+from . import points, provenance, sweeps, write
 
 # The readings this study departs from the defaults in, named so that the tables declare them: the matched
 # pair's substrate stiffness, the damping's form and rate, the contact under unbonded sites.
@@ -211,7 +211,7 @@ def tabulate(runs: str, img: str, tables: str) -> str:
         r.update(fit.get(group(r), nan))
     table.write_csv(os.path.join(tables, "cracks_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
                     arrests)
-    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    source = provenance(rows)
     length_figure(arrests, fit, img, source)
     prediction_figure(arrests, img, source)
     return write(rows, RUN_COLS, os.path.join(tables, "cracks_precursors.csv"))

@@ -19,17 +19,14 @@ import numpy as np
 
 from parslip.analysis import rupture
 from parslip.analysis.fronts import band_of, wave_speeds
+from parslip.model.physics import ROW_HEIGHT
 from parslip.plot.figures import pyplot, save
 
-from . import points, sweeps, write
+from . import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "rows", "v0", "patch_delta_b", "patch_width", "launch", "S", "tau0_over_taup", "L_c",
         "L_trans", "L_andrews", "ratio", "trans_by", "L_daughter", "L_fast", "room", "reflection", "v_super",
         "v_super_over_c_s", "band", "main_band", "bottom_kn", "damping", "zeta"]
-# The longitudinal wave reflected by the top and bottom rows overtakes a tip running at c_r at
-# 2 h c_r / sqrt(c_l^2 - c_r^2) from nucleation (h the block's height): after it the run is no longer an
-# unbounded body's.
-ROW_HEIGHT = math.sqrt(3.0) / 2.0
 
 
 def main_front(run, reach: float = 0.05):
@@ -146,7 +143,7 @@ def tabulate(runs: str, img: str, tables: str) -> str:
     """cracks_supershear.csv (a row per run, ``COLS`` then scene and commit) and the two figures; returns
     the Markdown table."""
     rows = [_row(os.path.basename(d), row, run) for d in sweeps(runs, "supershear") for row, run in points(d)]
-    source = {"scene": [r["scene"] for r in rows], "commit": [r["commit"] for r in rows]}
+    source = provenance(rows)
     md = write(rows, COLS, os.path.join(tables, "cracks_supershear.csv"))
     transition_figure(rows, img, source)
     tips_figure(rows, img, source)
