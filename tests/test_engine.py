@@ -232,8 +232,10 @@ def test_rigid_substrate_is_the_stiff_limit():
 def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
     """numba checks a cached function against its own file only: the compiled loop would keep an old
     interface kernel after engine/kernels/interface.py changed.  The cache folder is keyed by the kernels'
-    sources (io.cache.kernel_cache_dir), so changing interface.py alone moves it, and a change outside the
-    kernels' packages does not."""
+    sources (io.cache.kernel_sources: the modules with compiled code and every module they import), so
+    changing interface.py alone moves it, as does a module whose constants the loop freezes in
+    (parallel/layout.py); a change to what only Python runs (the analysis, the run's orchestration in
+    engine/simulation.py) does not."""
     import shutil
     import subprocess
     import sys
@@ -248,11 +250,15 @@ def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
                               check=True).stdout.strip()
     first = where()
     assert first.startswith(str(tmp_path / "nc"))
-    (copy / "analysis" / "fronts.py").write_text((copy / "analysis" / "fronts.py").read_text() + "\n# x\n")
-    assert where() == first
+    for name in ("analysis/fronts.py", "engine/simulation.py", "engine/runner.py"):
+        (copy / name).write_text((copy / name).read_text() + "\n# x\n")
+        assert where() == first, name
     (copy / "engine" / "kernels" / "interface.py").write_text(
         (copy / "engine" / "kernels" / "interface.py").read_text() + "\n# a change\n")
-    assert where() != first
+    second = where()
+    assert second != first
+    (copy / "parallel" / "layout.py").write_text((copy / "parallel" / "layout.py").read_text() + "\n# a change\n")
+    assert where() not in (first, second)
 
 
 @pytest.mark.parametrize("mode,rows", [("push", ()), ("push", (1, 2)), ("pull", ()), ("shear", ()), ("none", ())])

@@ -65,13 +65,47 @@ def store(k: str, value: tuple[float, str]) -> None:
         pass
 
 
-# The subpackages whose code numba compiles into the time loop (kernels, the exchange, the law's codes).
-KERNEL_PACKAGES = ("engine", "parallel", "model")
+# What marks a module whose code numba compiles (the kernels, the exchange, the MPI symbols).
+COMPILED_MARKS = ("@njit", "njit(", "@overload", "@intrinsic", "ExternalFunction")
+
+
+def kernel_sources(root: str) -> list[str]:
+    """The package's modules the compiled code depends on: every module with compiled code, and every
+    package module they import, transitively (their functions are compiled in, their constants frozen in).
+    A module only Python runs (the run's orchestration, the layouts' bookkeeping, the writers) is not
+    among them, so changing it does not make numba compile the loop again."""
+    import ast
+    sources = {}
+    for path in glob.glob(os.path.join(root, "**", "*.py"), recursive=True):
+        with open(path, encoding="utf-8") as fh:
+            sources[path] = fh.read()
+
+    def imported(path):
+        base, out = os.path.dirname(path), set()
+        for node in ast.walk(ast.parse(sources[path])):
+            if isinstance(node, ast.ImportFrom) and node.level > 0:
+                d = base
+                for _ in range(node.level - 1):
+                    d = os.path.dirname(d)
+                mod = os.path.join(d, *(node.module.split(".") if node.module else []))
+                for c in [mod + ".py", os.path.join(mod, "__init__.py")] + [os.path.join(mod, a.name + ".py")
+                                                                           for a in node.names]:
+                    if c in sources:
+                        out.add(c)
+        return out
+
+    todo = [p for p, text in sources.items() if any(m in text for m in COMPILED_MARKS)]
+    seen = set(todo)
+    while todo:
+        for q in imported(todo.pop()) - seen:
+            seen.add(q)
+            todo.append(q)
+    return sorted(seen)
 
 
 def kernel_cache_dir() -> str:
     """Where numba keeps the compiled kernels: $NUMBA_CACHE_DIR (else this cache's "numba" folder), in a
-    subfolder named by a hash of the kernels' sources and the numba and Python versions.
+    subfolder named by a hash of the kernels' sources (``kernel_sources``) and the numba and Python versions.
 
     numba checks a cached function against its own file's time stamp only, not the files of the functions
     it calls: the compiled time loop (engine/loop.py) would keep the old interface kernel after
@@ -85,11 +119,10 @@ def kernel_cache_dir() -> str:
     except ImportError:
         pass
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    for sub in KERNEL_PACKAGES:
-        for path in sorted(glob.glob(os.path.join(root, sub, "**", "*.py"), recursive=True)):
-            h.update(os.path.relpath(path, root).encode())
-            with open(path, "rb") as fh:
-                h.update(fh.read())
+    for path in kernel_sources(root):
+        h.update(os.path.relpath(path, root).encode())
+        with open(path, "rb") as fh:
+            h.update(fh.read())
     base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(cache_dir(), "numba")
     return os.path.join(base, f"parslip-{h.hexdigest()[:16]}")
 
