@@ -77,33 +77,43 @@ def event_room(sites: int, buffer_events: int = 0) -> tuple[int, int]:
 
 def predict_rank(setup, rank: int, ranks: int, gather: bool = True) -> int:
     """Predicted peak resident bytes of rank ``rank`` of a run of ``setup`` on ``ranks`` ranks."""
+    return int(per_rank_bytes(setup, ranks, gather)[rank])
+
+
+def per_rank_bytes(setup, ranks: int, gather: bool = True, counts=None, bounds=None) -> np.ndarray:
+    """Predicted peak resident bytes of every rank, from the decomposition's counts in closed form
+    (``parallel.counts``: no layout is built, so this stays fast at thousands of ranks); ``counts`` and
+    ``bounds`` of another decomposition than the first (a slid block's) may be given."""
     from ..model.stability import LANCZOS_MAX_DOFS
-    from ..parallel.layout import build_layout, owned_site_counts
+    from ..parallel.counts import rank_counts
+    from ..parallel.layout import column_cost, owned_site_counts, partition
     lat = setup.lattice
     item = np.dtype(setup.dtype).itemsize
     snapshots = setup.n_snapshots > 0
-    lay = build_layout(lat, rank, ranks, setup.reach, setup.drive.mode)
-    bl, tl = lay.blocks
-    cells = lambda b: int(np.prod(b.shape))           # noqa: E731
-    state = item * (4 * cells(bl) + 5 * cells(tl))     # 2 levels x (x, y), and the drive's reference (top)
-    c0, c1 = lay.col_range
-    owned = int(lat.col_start[c1] - lat.col_start[c0])
-    sites = int(max(tl.owned[0][1] - tl.owned[0][0], 0)) if lat.has_interface else 0
-    widest = int(owned_site_counts(lat, lay.bounds).max())      # every rank's buffer holds as many frames
-    driven = lat.driven_in_columns(setup.drive.mode, setup.drive.rows, c0, c1)
+    if bounds is None:
+        bounds = partition(column_cost(lat), ranks)
+    c = counts if counts is not None else rank_counts(lat, bounds, setup.reach)
+    state = item * (4 * c.cells[0] + 5 * c.cells[1])     # 2 levels x (x, y), and the drive's reference (top)
+    owned, sites = c.nodes, c.sites
+    widest = int(owned_site_counts(lat, bounds).max())  # every rank's buffer holds as many frames
+    driven = np.array([lat.driven_in_columns(setup.drive.mode, setup.drive.rows, int(bounds[p]), int(bounds[p + 1]))
+                       for p in range(ranks)], np.int64)
     frames = frame_bytes(frame_buffer(widest, setup.n_frames), sites, driven)
-    events = event_room(sites, setup.scene["output.buffer_events"])[1] * EVENT_BYTES
+    limit = event_room(1, setup.scene["output.buffer_events"])[0]
+    events = np.where(sites > 0, limit + 2 * sites * CHECK_EVERY, 0) * EVENT_BYTES
     persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames + events
-    transient = owned * SNAPSHOT_BYTES if snapshots else 0
-    if rank == 0 and snapshots and (gather or ranks == 1):     # serial h5py writes every node here
-        transient = WRITER_FIXED + lat.n_nodes * WRITER_BYTES
-    omega = lat.n_nodes * OMEGA_BYTES if rank == 0 and 2 * lat.n_nodes <= LANCZOS_MAX_DOFS else 0
-    return BASE + persistent + max(transient, omega, owned * SETUP_BYTES)
+    transient = owned * SNAPSHOT_BYTES if snapshots else np.zeros(ranks, np.int64)
+    if snapshots and (gather or ranks == 1):            # serial h5py writes every node on rank 0
+        transient[0] = WRITER_FIXED + lat.n_nodes * WRITER_BYTES
+    omega = np.zeros(ranks, np.int64)
+    if 2 * lat.n_nodes <= LANCZOS_MAX_DOFS:
+        omega[0] = lat.n_nodes * OMEGA_BYTES
+    return BASE + persistent + np.maximum.reduce([transient, omega, owned * SETUP_BYTES])
 
 
 def predict(setup, ranks: int, gather: bool = True) -> dict:
     """Predicted peak resident bytes of each rank of a run of ``setup`` on ``ranks`` ranks."""
-    per_rank = [predict_rank(setup, rank, ranks, gather) for rank in range(ranks)]
+    per_rank = [int(v) for v in per_rank_bytes(setup, ranks, gather)]
     n = max(setup.lattice.n_nodes, 1)
     return {"per_rank": per_rank, "total": sum(per_rank),
             "bytes_per_node": (sum(per_rank) - ranks * BASE) / n}

@@ -127,7 +127,9 @@ def rank_share(lattice, layout) -> RankShare:
             bulk = max(bulk, *_halo_sides(blk, r))
     sent = sum(_seg_values(p.send) + _site_values(p.send_sites) for p in layout.peers)
     recv = {p.rank: _seg_values(p.recv) + _site_values(p.recv_sites) for p in layout.peers}
-    return RankShare(rank=layout.rank, cols=(c0, c1), nodes=int(lattice.col_start[c1] - lattice.col_start[c0]),
+    nodes = sum(int(blk.rows) * max(int(blk.owned[0][1] - blk.owned[0][0]), 0)
+                for b, blk in ((BOTTOM, bl), (TOP, tl)) if blk.rows and lattice.numbered[b])
+    return RankShare(rank=layout.rank, cols=(c0, c1), nodes=nodes,
                      sites=sites, values_sent=sent, values_received=sum(recv.values()),
                      peers=sorted(recv), halo_top=halo_top, halo_bottom=halo_bottom, halo_bulk=bulk,
                      peer_values=recv)
@@ -237,6 +239,100 @@ def predict(f: Fit, shares: list[RankShare], cluster: Cluster, value_bytes: int 
     t = compute + b * H + exposed
     return {"features": feats, "compute_us": compute, "pack_us": b * H, "network_us": network,
             "exposed_network_us": exposed, "us_per_step": t}
+
+
+@dataclass
+class Coefficients:
+    """What the travel model (``travel_model``) charges per step, and the network it assumes.
+
+    node_ns            ns per node update of one core (1 / the per-core throughput `parslip bench` measures)
+    site_ns            ns per interface site the bond update runs over, beyond its node update
+    fixed_us           us per step that does not scale (loop overhead, flag checks, the exchange's calls)
+    pack_ns_per_value  ns to pack or unpack one halo value (``studies.bench.pack``, measured directly)
+    latency_us         us per message (MPI's small-message latency on the network)
+    bandwidth_gbs      GB/s per rank on the network
+    overlap            the messages travel while the interior computes (``engine.loop``'s LATE tasks)
+    source             where the coefficients come from
+    """
+    node_ns: float = 1.68
+    site_ns: float = 20.0
+    fixed_us: float = 1.0
+    pack_ns_per_value: float = 2.5
+    latency_us: float = 2.0
+    bandwidth_gbs: float = 10.0
+    overlap: bool = True
+    source: str = "defaults"
+
+
+def travel_shifts(setup, samples: int = 5) -> list[int]:
+    """The block's shifts (columns) the travel model looks at: from none to the drive's whole travel, when the
+    halos follow the slip; none when the scene fixes a slip reach (its slabs never move)."""
+    if setup.reach.drift is None or not setup.lattice.has_interface:
+        return [0]
+    travel = setup.drive.travel(setup.material.c_r, setup.t_unit)
+    return sorted({int(round(travel * k / max(samples - 1, 1))) for k in range(samples)})
+
+
+def step_model(counts, coef: Coefficients) -> dict:
+    """Each rank's predicted time per step (us) from its counts (``parallel.counts.Counts``):
+
+        compute  = node_ns N + site_ns (S + F)           F: the HALO sites its bond update also runs over
+        pack     = pack_ns_per_value H                   H: halo values sent plus received
+        network  = (M / 2) latency + 8 H / bandwidth      M: messages sent plus received
+        exposed  = max(0, network - interior) with overlap, else network, where the interior is the
+                   compute of the nodes no peer needs, at least compute (1 - H / (2 N))
+        step     = compute + pack + exposed + fixed_us
+
+    The busiest rank sets the step, as every rank waits for its peers' halos."""
+    foreign = counts.halo_top.sum(axis=1)
+    compute = (coef.node_ns * counts.nodes + coef.site_ns * (counts.sites + foreign)) / 1e3
+    values = counts.values
+    pack = coef.pack_ns_per_value * values / 1e3
+    network = counts.messages / 2 * coef.latency_us + 8 * values / (coef.bandwidth_gbs * 1e3)
+    interior = compute * np.clip(1 - values / (2 * np.maximum(counts.nodes, 1)), 0, 1)
+    exposed = np.maximum(network - interior, 0) if coef.overlap else network
+    step = compute + pack + exposed + coef.fixed_us
+    return {"step": step, "compute": compute + coef.fixed_us, "foreign": foreign}
+
+
+def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, samples: int = 5) -> dict:
+    """The busiest rank's figures per step, each the maximum over the scene's whole travel (``travel_shifts``:
+    the slabs cut for the block at each shift, its halos those of a drift box with the scene's skin), and
+    rank 0's memory over the median rank's; every count in closed form (``parallel.counts``), so it takes
+    seconds at thousands of ranks.  Keys as `parslip info --json` prints them."""
+    from ...parallel.counts import rank_counts
+    from ...parallel.layout import Drift, column_cost, drift_reach, partition
+    from ...scene.memory import per_rank_bytes
+    lat = setup.lattice
+    out = {"ranks": ranks, "shifts": travel_shifts(setup, samples), "peers_max": 0, "messages_per_step": 0,
+           "halo_values_per_step": 0, "foreign_sites_max": 0, "step_us_predicted": 0.0, "step_us_compute": 0.0,
+           "efficiency_predicted": 1.0, "rank0_memory_ratio": 0.0, "memory_mib_rank0": 0.0,
+           "memory_mib_median": 0.0}
+    for shift in out["shifts"]:
+        reach = setup.reach
+        if reach.drift is not None:
+            d = reach.drift
+            reach = drift_reach(reach.link, Drift(shift, d.top, d.bottom, d.skin))
+        bounds = partition(column_cost(lat, shift), ranks)
+        c = rank_counts(lat, bounds, reach, (0, shift))
+        m = step_model(c, coef)
+        mem = per_rank_bytes(setup, ranks, gather, counts=c, bounds=bounds)
+        med = float(np.median(mem))
+        step, compute = float(m["step"].max()), float(m["compute"].max())
+        out["peers_max"] = max(out["peers_max"], int(c.peers.max()))
+        out["messages_per_step"] = max(out["messages_per_step"], int(c.messages.max()))
+        out["halo_values_per_step"] = max(out["halo_values_per_step"], int(c.values.max()))
+        out["foreign_sites_max"] = max(out["foreign_sites_max"], int(m["foreign"].max()))
+        out["rank0_memory_ratio"] = max(out["rank0_memory_ratio"], float(mem[0]) / med)
+        out["memory_mib_rank0"] = max(out["memory_mib_rank0"], float(mem[0]) / 2 ** 20)
+        out["memory_mib_median"] = max(out["memory_mib_median"], med / 2 ** 20)
+        if step >= out["step_us_predicted"]:
+            out["step_us_predicted"], out["step_us_compute"] = step, compute
+        out["efficiency_predicted"] = min(out["efficiency_predicted"], compute / step)
+    out.update({"pack_ns_per_value": coef.pack_ns_per_value, "latency_us": coef.latency_us,
+                "bandwidth_gbs": coef.bandwidth_gbs, "overlap": coef.overlap, "node_ns": coef.node_ns,
+                "site_ns": coef.site_ns, "fixed_us": coef.fixed_us, "coefficients": coef.source})
+    return out
 
 
 def steps_to(setup, t_lcr: float) -> int:
