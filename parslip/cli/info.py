@@ -148,9 +148,14 @@ def _cost_lines(st, ranks: int) -> list[str]:
                                f" + {st.n_snapshots} snapshots {_mib(ob['snapshots'])} = {_mib(ob['total'])} "
                                f"of data"))
     r = st.reach
-    out.append(_line("ranks", f"1 to {st.max_ranks()} (slabs of whole columns; interface halos of {r.top_site} and "
-                              f"{r.bottom_site} columns serve a slip reach of {st.slip_reach:.3g} a, across as "
-                              f"many slabs as needed)"))
+    if r.drift is None:
+        halo = (f"fixed interface halos of {max(r.top)} and {max(r.bottom)} columns serve a slip reach of "
+                f"{st.slip_reach:.3g} a, across as many slabs as needed")
+    else:
+        halo = (f"interface halos of {max(r.top)} and {max(r.bottom)} columns at the start follow the slip: the "
+                f"block's slabs move with it, its halos reach {st.skin[1]:.3g} a beyond it ahead and "
+                f"{st.skin[0]:.3g} a behind")
+    out.append(_line("ranks", f"1 to {st.max_ranks()} (slabs of whole columns; {halo})"))
     return out
 
 

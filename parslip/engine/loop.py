@@ -50,6 +50,7 @@ from numba import njit
 
 from ..model.drive import DRIVE_SPRING, DRIVE_X, DRIVE_XY  # noqa: F401  (the drive word's bits, ``model.drive``)
 from ..parallel.exchange import complete, post, progress, reduce_max
+from ..parallel.plans import REDUCE_WORDS
 from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, MASKED, NO_DOWN, NO_UP, NODES, PAD, ROWS
 from .kernels import budget as bg
 from .kernels import interface as ik
@@ -80,9 +81,10 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy ste
 # exact sum's quanta per m c^2 (``kernels.exact.scales``); cs: the kernels' factors with them,
 # [zeta/(4 dt) S_damp, -S_damp/(2 C), S_kin/(2 dt^2), -S_el/(2 C)] (``stencil.budget_shares``).
 Budget = namedtuple("Budget", "acc work broken formed base prev cs scale")
-# What the loop reports: flags (this rank's first problem), gflags (their MAX over the ranks), timers
-# (ns per phase), beat (BEAT_STEP: the step the loop last passed, read by the monitor thread).
-Diag = namedtuple("Diag", "flags gflags timers beat")
+# What the loop reports: flags (this rank's first problem, and its interface rows' drift), gflags (their MAX over
+# the ranks), timers (ns per phase), beat (BEAT_STEP: the step the loop last passed, read by the monitor
+# thread), halo (the drift box the halos were built for, and the drift at the last agreement: ``H_*``).
+Diag = namedtuple("Diag", "flags gflags timers beat halo")
 # Scalars of one run (``Simulation.params``):
 #   n_ramp, n_drive_start   steps of the F_N ramp, and the first drive step
 #   drive                   0 no drive; DRIVE_X the driven face's x is prescribed; DRIVE_XY its y is also
@@ -99,8 +101,12 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   drag                    the kernels sum the body drag's dissipation every step (``output.energy = "checked"``)
 #   event_limit             events a rank may hold at an agreement before every rank returns EVENTS_FULL
 #   spring, v0dt            the loader spring k_s (m c^2/a^2, with DRIVE_SPRING) and v0 dt (a), in the float type
+#   follow, shift           the halos follow the interface's drift (several ranks, no explicit slip reach): the
+#                           agreements also reduce the drift and return REBUILD when it nears the halo's box;
+#                           shift D: the block's columns stand at x-columns c + D (``parallel.layout.Drift``)
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
-                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated drag")
+                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated drag follow "
+                              "shift")
 
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
@@ -110,11 +116,25 @@ KEEP_FORCE = 4
 # Frame cursor: [first frame index held in the buffer, frames held, last frame index recorded].
 C_BASE, C_COUNT, C_LAST = range(3)
 
-# Flags: [status bits, step, block, row, global column, value*1e6 as int, events held].  The MAX over the
-# ranks of L_EVENTS is the fullest event record: every rank learns it at the same agreement.
+# Flags: [status bits, step, block, row, global column, value*1e6 as int, events held, then the drift of this
+# rank's interface rows in DRIFT_QUANTA per a, outward: the largest u_x - D of its block's interface sites,
+# the largest -(u_x - D), the largest u_x of its substrate's interface sites, the largest -u_x].  The MAX over
+# the ranks of L_EVENTS is the fullest event record, and of the drift slots the whole interface's extremes:
+# every rank learns them at the same agreement.
 FLAG_NONFINITE, FLAG_RUNAWAY, FLAG_REACH, FLAG_FOLD, FLAG_MPI = 1, 2, 4, 8, 16
-(L_BITS, L_STEP, L_BLOCK, L_ROW, L_COL, L_VALUE, L_EVENTS) = range(7)
-L_SIZE = 8
+(L_BITS, L_STEP, L_BLOCK, L_ROW, L_COL, L_VALUE, L_EVENTS, L_TOP_HI, L_TOP_LO, L_BOTTOM_HI, L_BOTTOM_LO) = range(11)
+L_DRIFT = L_TOP_HI            # the four drift slots, in this order
+L_SIZE = 12
+assert L_SIZE <= REDUCE_WORDS          # the exchange's reduction holds them all
+DRIFT_QUANTA = 64             # per a: drift extremes are rounded outward to 1/64 a
+NO_SITES = -(1 << 60)         # a drift slot of a rank without such sites (below any extreme)
+
+# The halo's drift box (``Diag.halo``), in DRIFT_QUANTA per a and in the order of the drift slots (outward):
+# H_LIMIT: the box's edges; H_MARGIN: the room an edge must keep at an agreement (half its skin), and at
+# least twice the drift's growth since the last agreement; H_PREV: the extremes at the last agreement;
+# H_GROWTH: their growth over the last agreement interval (what a rebuild reads to widen the skin).
+H_LIMIT, H_MARGIN, H_PREV, H_GROWTH = 0, 4, 8, 12
+H_SIZE = 16
 
 # Phase timers (ns), accumulated in ``timers`` over one step in TIME_EVERY: [interface bonds, early tasks,
 # post, other tasks, complete] and the number of timed steps; checks are timed whenever they run, frames one
@@ -129,9 +149,10 @@ TIME_EVERY = 16
 BEAT_STEP, BEAT_IN_LOOP = 0, 1
 BEAT_SIZE = 2
 
-# Why ``advance`` returned: the end, the frame buffer full, a problem, or some rank's event record past
-# ``Params.event_limit`` (the caller writes frames and events out, then calls again).
-DONE, FRAMES_FULL, STOPPED, EVENTS_FULL = 0, 1, 2, 3
+# Why ``advance`` returned: the end, the frame buffer full, a problem, some rank's event record past
+# ``Params.event_limit`` (the caller writes frames and events out, then calls again), or the interface's drift
+# near the edge of the box its halos cover (the caller rebuilds the slabs and halos, then calls again).
+DONE, FRAMES_FULL, STOPPED, EVENTS_FULL, REBUILD = 0, 1, 2, 3, 4
 
 
 @njit(cache=True, _nrt=False)
@@ -486,9 +507,53 @@ def _level(lv, n):
     return Level(lv.bx1, lv.by1, lv.tx1, lv.ty1)
 
 
+@njit(cache=True, _nrt=False)
+def _drift(nxt, prm, iface, flags):
+    """This rank's drift extremes into the drift slots of ``flags`` (DRIFT_QUANTA per a, rounded outward): of
+    u_x(n + 1) - D over its OWNED block interface sites, and of u_x(n + 1) over its OWNED substrate ones."""
+    g = iface.geom
+    q = float(DRIFT_QUANTA)
+    for k in range(4):
+        flags[L_DRIFT + k] = NO_SITES
+    if g.town1 > g.town0:
+        hi, lo = -np.inf, np.inf
+        for j in range(g.town0, g.town1):
+            v = float(nxt.tx[PAD, j]) - prm.shift
+            hi, lo = max(hi, v), min(lo, v)
+        flags[L_TOP_HI] = np.int64(np.ceil(hi * q))
+        flags[L_TOP_LO] = np.int64(np.ceil(-lo * q))
+    if g.bown1 > g.bown0 and not prm.rigid:
+        br = prm.brow
+        hi, lo = -np.inf, np.inf
+        for i in range(g.bown0, g.bown1):
+            v = float(nxt.bx[br, i])
+            hi, lo = max(hi, v), min(lo, v)
+        flags[L_BOTTOM_HI] = np.int64(np.ceil(hi * q))
+        flags[L_BOTTOM_LO] = np.int64(np.ceil(-lo * q))
+
+
+@njit(cache=True, _nrt=False)
+def _near_edge(g, halo):
+    """Whether the agreed drift extremes ``g`` (every rank has the same) came near an edge of the halo's box: an
+    edge keeps H_MARGIN, and at least twice the extreme's growth since the last agreement, of room.  Records
+    the extremes and their growth in ``halo``; the same answer on every rank."""
+    near = False
+    for k in range(4):
+        e = g[L_DRIFT + k]
+        if e == NO_SITES:
+            continue
+        grow = max(e - halo[H_PREV + k], 0)
+        halo[H_GROWTH + k] = grow
+        halo[H_PREV + k] = e
+        if halo[H_LIMIT + k] - e < max(halo[H_MARGIN + k], 2 * grow):
+            near = True
+    return near
+
+
 @njit(cache=True, nogil=True)
 def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
-    """Advance the state from step n0 towards n1; returns (n, why) with why DONE, FRAMES_FULL or STOPPED.
+    """Advance the state from step n0 towards n1; returns (n, why) with why DONE, FRAMES_FULL, STOPPED,
+    EVENTS_FULL or REBUILD.
 
     ``diag.flags`` are this rank's problems (first one kept, with its step and place); ``diag.gflags``
     their MAX over all ranks, refreshed every ``prm.check_every`` steps; ``diag.timers`` accumulates the
@@ -519,6 +584,8 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
             _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)
             g = diag.gflags
             diag.flags[L_EVENTS] = iface.events.count[0]
+            if prm.follow:
+                _drift(nxt, prm, iface, diag.flags)
             for i in range(g.shape[0]):
                 g[i] = diag.flags[i]
             reduce_max(plan, g)
@@ -527,6 +594,9 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
             if g[L_BITS] != 0:
                 beat[BEAT_IN_LOOP] = 0
                 return n + 1, STOPPED
+            if prm.follow and _near_edge(g, diag.halo):
+                beat[BEAT_IN_LOOP] = 0
+                return n + 1, REBUILD
             if g[L_EVENTS] > prm.event_limit:
                 beat[BEAT_IN_LOOP] = 0
                 return n + 1, EVENTS_FULL

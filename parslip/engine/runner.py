@@ -376,6 +376,11 @@ class Job:
         if "drive_s" in tm:
             log.info(f"drive phase {tm['drive_s']:.3f} s ({tm['drive_cpu_s']:.3f} s CPU): "
                      f"{tm['drive_steps']} steps, {tm['drive_steps'] / max(tm['drive_s'], 1e-9):,.0f} steps/s")
+        if self.sim.params.follow:
+            d = self.sim.layout.reach.drift
+            log.info(f"interface halo: {self.sim.rebuilds} rebuilds (the block's slabs stand {d.shift} columns "
+                     f"ahead of the substrate's; halos of {max(self.sim.layout.reach.top)} and "
+                     f"{max(self.sim.layout.reach.bottom)} columns)")
 
 
 def _load(scene, sets):

@@ -20,9 +20,11 @@ from ..model.interface import BONDS
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
+from ..parallel.migrate import NODES, SITES, Placement, block_columns, redistribute
 # RUNAWAY_JUMP (a): a node that moves this far in one step is running away.  It lives with the scene
 # limits, which refuse a drive that would move its face that far per step by prescription.
 from ..scene.limits import RUNAWAY_JUMP
+from . import follow
 from . import loop as L
 from .kernels import budget as bg
 from .kernels import exact
@@ -41,42 +43,33 @@ class Simulation:
         rank, size = (comm.Get_rank(), comm.Get_size()) if self.comm else (0, 1)
         self.rank, self.size = rank, size
         sc = st.scene
-        self.layout = build_layout(st.lattice, rank, size, st.reach, st.drive.mode)
         self.dtype = np.dtype(dtype or st.dtype)
         lat = st.lattice
-        # The frame buffer holds the same number of frames on every rank: sized from the largest slab's site
-        # count, which every rank computes from the slab bounds; the event record is written out at an
-        # agreement of the ranks (see the collective rule in ``loop``).
-        counts = owned_site_counts(lat, self.layout.bounds)
-        widest = int(counts.max())
-        self.event_limit, capacity = event_room(int(counts[rank]) if lat.has_interface else 0, buffer_events)
-        self.state = State(st, self.layout, self.dtype, event_capacity=capacity)
-        self.plan = build_plan(self.layout, self.dtype, self.comm)
-        self.sched = L.Schedule(tasks=self.layout.tasks, ptr=task_ranges(self.layout.tasks))
+        self.buffer_events = buffer_events
+        self._buffer_frames = buffer_frames
+        # The halos follow the interface's drift (``engine.follow``) on several ranks unless the scene fixes a slip
+        # reach; one rank holds every site and needs no halo.
+        follow = size > 1 and lat.has_interface and st.reach.drift is not None
+        self.rebuilds = 0                # how many times the slabs and halos followed the drift
         cf = st.damping.force_factor(st.dt)
         self.params = L.Params(
             n_ramp=st.n_ramp, n_drive_start=st.n_drive_start, drive=st.drive.code,
             frame_every=st.frame_every, n_frames=st.n_frames, frame_offset=0, check_every=CHECK_EVERY,
             has_iface=bool(lat.has_interface), rigid=bool(lat.rigid),
-            brow=int(self.layout.blocks[0].prow(self.layout.blocks[0].rows - 1)), dt=float(st.dt), v0=float(st.v0),
+            brow=int(lat.bottom.rows - 1 + PAD), dt=float(st.dt), v0=float(st.v0),
             fext=float(-sc["load.FN"] / lat.top.cols if lat.has_interface else 0.0), jump=float(RUNAWAY_JUMP),
             cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=st.damping.damped,
-            event_limit=self.event_limit, spring=self.dtype.type(st.drive.spring), rated=st.damping.rated,
-            drag=st.damping.damped and sc["output.energy"] == "checked",
-            v0dt=self.dtype.type(st.v0 * st.dt))
+            event_limit=event_room(0, buffer_events)[0], spring=self.dtype.type(st.drive.spring),
+            rated=st.damping.rated, drag=st.damping.damped and sc["output.energy"] == "checked",
+            v0dt=self.dtype.type(st.v0 * st.dt), follow=follow, shift=0)
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
-                           timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
-        nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
-        cap = buffer_frames if buffer_frames > 0 else frame_buffer(widest, st.n_frames)
-        self.buffer_frames = cap = int(min(cap, st.n_frames))
-        ndrive = len(self.state.drive.force)
-        self.frames = L.Frames(intact=np.zeros((cap, nsites), np.uint8), partner=np.zeros((cap, nsites), np.int32),
-                               ux=np.zeros((cap, nsites)), uy=np.zeros((cap, nsites)), sxy=np.zeros((cap, nsites)),
-                               syy=np.zeros((cap, nsites)), fx=np.zeros((cap, nsites)),
-                               fdrive=np.zeros((cap, ndrive)), energy=np.zeros((cap, 5, bg.N_TERMS)),
-                               step=np.zeros(cap, np.int64),
-                               cursor=np.array([0, 0, -1], np.int64))
-        self.budget = self._budget(cf)
+                           timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64),
+                           halo=np.zeros(L.H_SIZE, np.int64))
+        self.frames = None
+        self._build(build_layout(lat, rank, size, st.reach, st.drive.mode))
+        # The slabs of no drift: each rank's nodes are one contiguous range of global ids, in which the output
+        # file's node datasets are written (the first layout's, as nothing has slid yet).
+        self.io_placement = Placement(self.layout.bounds, (0, 0))
         self.energy_base = None          # rank 0: the state's terms at the drive's start (``budget_frames``)
         # Steps per compiled call before any agreement: from the lattice and rank count, the same everywhere.
         self.chunk = int(np.clip(CHUNK_UPDATES * size / max(lat.n_nodes, 1), 64, 200_000))
@@ -88,6 +81,39 @@ class Simulation:
         self.snapshots_written = 0
         self.last_frame_step = -1
         self.events_written = 0          # bond events in the output file (over all ranks)
+
+    def _build(self, layout):
+        """This rank's arrays for ``layout``, all zero: the state, the exchange plan, the schedule, the frame
+        buffer (the frames held so far must have been written) and the budget's running totals, and the
+        drift box its halos serve (``Diag.halo``)."""
+        st, lat, rank = self.setup, self.setup.lattice, self.rank
+        self.layout = layout
+        # The frame buffer holds the same number of frames on every rank: sized from the largest slab's site
+        # count, which every rank computes from the slab bounds; the event record is written out at an
+        # agreement of the ranks (see the collective rule in ``loop``).
+        counts = owned_site_counts(lat, layout.bounds, layout.offsets[1])
+        self.event_limit, capacity = event_room(int(counts[rank]) if lat.has_interface else 0, self.buffer_events)
+        self.state = State(st, layout, self.dtype, event_capacity=capacity)
+        self.plan = build_plan(layout, self.dtype, self.comm)
+        self.sched = L.Schedule(tasks=layout.tasks, ptr=task_ranges(layout.tasks))
+        drift = layout.reach.drift if layout.reach is not None else None
+        self.params = self.params._replace(shift=drift.shift if drift is not None else 0)
+        nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
+        cap = self._buffer_frames if self._buffer_frames > 0 else frame_buffer(int(counts.max()), st.n_frames)
+        self.buffer_frames = cap = int(min(cap, st.n_frames))
+        ndrive = len(self.state.drive.force)
+        cursor = self.frames.cursor if self.frames is not None else np.array([0, 0, -1], np.int64)
+        self.frames = L.Frames(intact=np.zeros((cap, nsites), np.uint8), partner=np.zeros((cap, nsites), np.int32),
+                               ux=np.zeros((cap, nsites)), uy=np.zeros((cap, nsites)), sxy=np.zeros((cap, nsites)),
+                               syy=np.zeros((cap, nsites)), fx=np.zeros((cap, nsites)),
+                               fdrive=np.zeros((cap, ndrive)), energy=np.zeros((cap, 5, bg.N_TERMS)),
+                               step=np.zeros(cap, np.int64), cursor=cursor)
+        self.budget = self._budget(st.damping.force_factor(st.dt))
+        if drift is not None:
+            q = L.DRIFT_QUANTA
+            h = self.diag.halo
+            h[L.H_LIMIT:L.H_LIMIT + 4] = np.round(np.array(drift.edges) * q).astype(np.int64)
+            h[L.H_MARGIN:L.H_MARGIN + 4] = np.ceil(np.array(drift.skin) * q / 2).astype(np.int64)
 
     # ---------------------------------------------------------------- steps --
     @property
@@ -186,6 +212,10 @@ class Simulation:
             if why in (L.FRAMES_FULL, L.EVENTS_FULL):
                 self._flush(writer)
                 continue
+            if why == L.REBUILD:
+                self._phase("rebuild")
+                follow.rebuild(self, writer)
+                continue
             if why == L.STOPPED:
                 self._fail(writer)
         self.advance(self.n)                 # the frame of the last step, if it is one
@@ -198,15 +228,24 @@ class Simulation:
 
     # --------------------------------------------------------------- output --
     def output_spec(self):
-        """What the writer (``io.output.Output``) needs of this run, as a frozen ``RunSpec``."""
+        """What the writer (``io.output.Output``) needs of this run, as a frozen ``RunSpec``: the node datasets'
+        slices of this rank's slab of no drift (``io_placement``, one contiguous range of global ids), and the
+        frames' sites and driven nodes of the slab it computes on (``output_sites``)."""
         from ..io.output import RunSpec
-        s, lat, lay = self.state, self.setup.lattice, self.layout
-        return RunSpec(setup=self.setup, rank=lay.rank, size=lay.size, col_range=tuple(lay.col_range),
-                       owned_sites=tuple(lay.owned_sites()) if lat.has_interface else (0, 0),
-                       node0=int(s.gid[0]) if s.n_owned else 0, site0=s.site0() if lat.has_interface else 0,
-                       driven_gid=s.driven_gid, frames_total=self.frames_total,
+        lat, io, r = self.setup.lattice, self.io_placement, self.rank
+        c0, c1 = int(io.bounds[r]), int(io.bounds[r + 1])
+        sites = block_columns(lat, io, r, TOP) if lat.has_interface else (0, 0)
+        return RunSpec(setup=self.setup, rank=r, size=self.size, col_range=(c0, c1), owned_sites=tuple(sites),
+                       node0=int(lat.col_start[c0]), site0=sites[0] - lat.top.col0 if lat.has_interface else 0,
+                       driven_gid=self.state.driven_gid, frames_total=self.frames_total,
                        snapshots_total=self.snapshots_total, buffer_frames=self.buffer_frames,
-                       events_written=self.events_written)
+                       events_written=self.events_written, frame_site0=self.output_sites()[0])
+
+    def output_sites(self) -> tuple:
+        """(first global site of this rank's interface frames, global ids of its driven nodes): where the frames
+        and drive forces it records belong, which change when the slabs follow the drift."""
+        s, lat = self.state, self.setup.lattice
+        return (s.site0() if lat.has_interface else 0), s.driven_gid
 
     @property
     def frames_total(self) -> int:
@@ -274,8 +313,9 @@ class Simulation:
 
         Every rank takes its OWNED part by global id, then halo exchanges fill the HALO copies."""
         self._phase("restore")
-        s, st = self.state, self.setup
         self.n = n = int(attrs["step"])
+        follow.resume(self, attrs)
+        s, st = self.state, self.setup
         for level, name in ((n, "u"), (n - 1, "u_prev")):
             s.set_owned_u(level, arrays[name][s.gid])
         top = s.own_block == TOP
@@ -285,13 +325,7 @@ class Simulation:
             sl = s.owned_sites()
             sites = np.arange(sl.stop - sl.start) + s.site0()
             s.set_owned_bonds({name: arrays[name][sites] for name in BONDS.checkpoint})
-        if self.comm is not None:
-            # Both levels: a rule may read u(n - 1) of HALO sites too (the slip velocity).
-            from ..parallel.halo_mpi import mpi_complete, mpi_post
-            for level in (n - 1, n):
-                bx, by, tx, ty = s.level(level)
-                mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
-                mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
+        self.refill_halos()
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
         self.events_written = int(attrs["events_written"])
@@ -308,6 +342,18 @@ class Simulation:
         self.snapshots_total = snaps + len(later)
         self.snapshots_written = snaps
         self._energy_restore(attrs)
+
+    def refill_halos(self):
+        """Collective: every HALO copy takes its owner's u(n), u(n - 1) and bond state, as after a step (both
+        levels: a rule may read u(n - 1) of HALO sites too, the slip velocity)."""
+        if self.comm is None:
+            return
+        from ..parallel.halo_mpi import mpi_complete, mpi_post
+        s = self.state
+        for level in (self.n - 1, self.n):
+            bx, by, tx, ty = s.level(level)
+            mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
+            mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
 
     # ---------------------------------------------------------- energy budget --
     def _pairs(self, parts) -> np.ndarray:
@@ -403,7 +449,7 @@ class Simulation:
                 "events_written": self.events_written,
                 "snapshots_written": self.snapshots_written, "counters": counters,
                 "omega_max": st.omega_max, "omega_method": st.omega_method, "dt": st.dt, "n_ranks": self.size,
-                "precision": self.dtype.name}
+                "precision": self.dtype.name, **follow.checkpoint_attrs(self)}
 
     def _snapshot(self, writer):
         j = self._snap.get(self.n)
@@ -416,7 +462,19 @@ class Simulation:
         st = self.setup
         t = st.to_lcr((self.n - st.n_drive_start) * st.dt)
         pos, vel, sig = self.state.node_fields(self.n)
-        writer.snapshot(j, t, pos, vel, sig, self.state.owned_partner())
+        partner = self.state.owned_partner()
+        here = follow.placement(self.layout)
+        if self.size > 1 and not (np.array_equal(here.bounds, self.io_placement.bounds) and
+                                  tuple(here.offsets) == tuple(self.io_placement.offsets)):
+            # The slabs followed the drift: the node fields go to the slabs the file is written in.
+            s = self.state
+            site = np.arange(len(partner), dtype=np.int64) + (s.site0() if self.setup.lattice.has_interface else 0)
+            got = redistribute(self.comm, self.setup.lattice, here, self.io_placement,
+                               {"nodes": (NODES, s.gid, {"pos": pos, "vel": vel, "sig": sig}),
+                                "sites": (SITES, site, {"partner": partner})})
+            cols, partner = got["nodes"][2], got["sites"][2]["partner"]
+            pos, vel, sig = cols["pos"], cols["vel"], cols["sig"]
+        writer.snapshot(j, t, pos, vel, sig, partner)
 
     # --------------------------------------------------------------- errors --
     def _gather(self, x):
@@ -444,11 +502,17 @@ class Simulation:
             col = int(first[L.L_COL])
             what = (f"the bond or re-bonding window of the interface site at column {col} reached past the substrate "
                     f"sites its rank holds" if col >= 0 else "the halo no longer covered the interface's reach")
+            if self.params.follow:
+                grow = max(st.skin[1] * 2, 2 * slip)
+                raise SlipReachError(
+                    f"interface slip reached {slip:.3g} a (the block relative to the substrate) at step {step} "
+                    f"(t = {t:.4g} l/c_r): {what}: the slip grew faster between two agreements of the ranks than "
+                    f"the halos' skin of {st.skin[1]:.3g} a allows; rerun with --set interface.halo_skin={grow:.3g}")
             raise SlipReachError(
                 f"interface slip reached {slip:.3g} a (the block relative to the substrate) at step {step} "
                 f"(t = {t:.4g} l/c_r): {what}, beyond "
                 f"interface.slip_reach = {st.slip_reach:.3g} a that the MPI halo covers; rerun with --set "
-                f"interface.slip_reach={max(2 * slip, st.slip_reach + 2):.3g}")
+                f"interface.slip_reach={max(2 * slip, st.slip_reach + 2):.3g}, or 0 to let the halos follow it")
         if bits & L.FLAG_FOLD:
             raise NonFiniteError(
                 f"the substrate's interface row folded at step {step} (t = {t:.4g} l/c_r): its site at column "

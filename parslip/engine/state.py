@@ -136,7 +136,7 @@ class State:
         """(block, row, local column) of every OWNED node, in global id order (column by column, substrate
         rows first), and the reference positions (a)."""
         lay = self.layout
-        nd = self.setup.lattice.nodes_in_columns(*lay.col_range)
+        nd = self.setup.lattice.nodes_in_block_columns((lay.block_columns(BOTTOM), lay.block_columns(TOP)))
         blk, row, col = nd["block"], nd["row"], nd["col"]
         self.own_block, self.own_row, self.own_col, self.gid = blk, row, col, nd["gid"]
         self.ref_x, self.ref_y = nd["x"], nd["y"]

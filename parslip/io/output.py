@@ -90,6 +90,9 @@ class RunSpec:
     snapshots_total   snapshots in the file once the run ends
     buffer_frames     frames the engine holds between flushes (the frame datasets' chunk rows)
     events_written    bond events in the file already (a restart's)
+    frame_site0       the first global site of this rank's interface frames: its slab's sites as it computes
+                      them, which differ from the node datasets' slab once the slabs follow the drift
+                      (``follow`` updates it and driven_gid as they move)
     """
     setup: object
     rank: int
@@ -103,6 +106,7 @@ class RunSpec:
     snapshots_total: int
     buffer_frames: int
     events_written: int
+    frame_site0: int = 0
 
 
 class Output:
@@ -134,6 +138,7 @@ class Output:
 
         # My slices of the global arrays: OWNED nodes are a contiguous range of global ids.
         self.node0, self.site0 = spec.node0, spec.site0
+        self.frame_site0 = spec.frame_site0
         c0, c1 = spec.col_range
         self.bulk_cells = _bulk_cells(lat, c0, c1)
         # The bulk cells' constant fields (not interface, intact), written with each snapshot.
@@ -463,7 +468,7 @@ class Output:
         recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``) and, from rank 0,
         their energy budget ``energy`` (``ENERGY_DATASETS``; None: not kept)."""
         ns = frames.intact.shape[1]
-        sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
+        sl = (slice(k0, k0 + count), slice(self.frame_site0, self.frame_site0 + ns))
         self._test_hooks(k0 + count)
         for name in FRAME_FIELDS:
             self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
@@ -549,9 +554,9 @@ class Output:
         friction_force = sum of the bonds' x-forces on the block, drive_force = sum of the drive's
         x-forces, mu = -friction_force / F_N."""
         if self.size > 1:
-            parts = self.comm.gather((self.site0, fx, self.driven_gid, fdrive), root=0)
+            parts = self.comm.gather((self.frame_site0, fx, self.driven_gid, fdrive), root=0)
         else:
-            parts = [(self.site0, fx, self.driven_gid, fdrive)]
+            parts = [(self.frame_site0, fx, self.driven_gid, fdrive)]
         if not self.root:
             return {}
         count = fx.shape[0]
@@ -570,6 +575,11 @@ class Output:
         friction, drive = _ordered_sum(fx_all), _ordered_sum(fd_all)
         mu = -friction / self.fn if self.fn > 0 else np.full(count, np.nan)
         return {"friction_force": friction, "drive_force": drive, "mu": mu}
+
+    def follow(self, sites: tuple):
+        """The slabs followed the drift: this rank's frames start at global site ``sites[0]`` and its drive forces
+        are those of the driven nodes ``sites[1]`` (``engine.simulation.Simulation.output_sites``)."""
+        self.frame_site0, self.driven_gid = int(sites[0]), np.asarray(sites[1])
 
     def snapshot(self, k, t, pos, vel, sig, partner):
         N, M = self.n_nodes, self.n_cells

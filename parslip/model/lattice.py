@@ -127,12 +127,28 @@ class Lattice:
             out[m] = self.col_start[col[m]] + below + row[m]
         return out
 
+    def locate(self, gid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(block, row, global column) of global ids ``gid``: the inverse of ``gid``."""
+        gid = np.asarray(gid, np.int64)
+        col = np.searchsorted(self.col_start, gid, side="right") - 1
+        k = gid - self.col_start[col]
+        below = np.zeros(len(col), np.int64) if not self.numbered[BOTTOM] else np.where(
+            (col >= self.bottom.col0) & (col < self.bottom.col0 + self.bottom.cols), self.bottom.rows, 0)
+        block = np.where(k < below, BOTTOM, TOP).astype(np.int64)
+        row = np.where(block == BOTTOM, k, k - below)
+        return block, row, col
+
     def nodes_in_columns(self, c0: int, c1: int) -> dict[str, np.ndarray]:
-        """All nodes with global column in [c0, c1), ordered by global id."""
-        c0, c1 = max(c0, 0), min(c1, self.ncols)
+        """All nodes with global column in [c0, c1), ordered by global id (a contiguous id range)."""
+        return self.nodes_in_block_columns(((c0, c1), (c0, c1)))
+
+    def nodes_in_block_columns(self, ranges) -> dict[str, np.ndarray]:
+        """The nodes of each block b with global column in ranges[b] = (c0, c1), ordered by global id: gid,
+        block, row, col and the reference x, y (a)."""
         blk, row, col = [], [], []
         for bi, b in enumerate(self.blocks):
-            cols = np.arange(max(c0, b.col0), min(c1, b.col0 + b.cols))
+            c0, c1 = ranges[bi]
+            cols = np.arange(max(c0, b.col0, 0), min(c1, b.col0 + b.cols, self.ncols))
             if not self.numbered[bi] or len(cols) == 0:
                 continue
             rr, cc = np.meshgrid(np.arange(b.rows), cols)
@@ -151,7 +167,11 @@ class Lattice:
             m = blk == bi
             x[m] = col[m] + b.offset(row[m])
             y[m] = b.y0 + row[m] * ROW_HEIGHT
-        gid = self.col_start[c0] + np.arange(len(blk))
+        if ranges[0] == ranges[1]:
+            c0 = max(ranges[0][0], 0)
+            gid = self.col_start[min(c0, self.ncols)] + np.arange(len(blk))      # one contiguous id range
+        else:
+            gid = self.gid(blk, row, col)
         return dict(gid=gid, block=blk, row=row, col=col, x=x, y=y)
 
     def neighbour(self, block, row, col, k):

@@ -23,7 +23,7 @@ from numba import njit
 from ..model.interface import BONDS
 from ..model.lattice import BOTTOM
 from . import mpi
-from .plans import SEGMENT, SITES, Plan
+from .plans import REDUCE_WORDS, SEGMENT, SITES, Plan
 
 TAG = 7
 
@@ -69,7 +69,7 @@ def build_plan(layout, dtype, comm=None) -> Plan:
     return Plan(peer=np.array([p.rank for p in peers], np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,
                 rs=rs, rs_ptr=rs_ptr, rts=rts, rts_ptr=rts_ptr, sbuf=np.zeros(sb_ptr[-1], dtype), sb_ptr=sb_ptr,
                 rbuf=np.zeros(rb_ptr[-1], dtype), rb_ptr=rb_ptr, req=req, status=status, handles=h,
-                rflags=np.zeros(8, np.int64), travel=np.array(BONDS.travel, np.int64))
+                rflags=np.zeros(REDUCE_WORDS, np.int64), travel=np.array(BONDS.travel, np.int64))
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -108,6 +108,16 @@ def _transfer(plan, i, bx, by, tx, ty, bonds, out):
         j0, n = sites[g].j0, sites[g].n
         for row in plan.travel:
             k = _move(buf, k, bonds, row, j0, n, out)
+
+
+@njit(cache=True, _nrt=False)
+def pack_all(plan, bx, by, tx, ty, bonds, out, repeats):
+    """Pack every peer's message into the send buffer (``out``), or unpack every received one into the HALO
+    copies, ``repeats`` times: what ``mpi_post`` and ``mpi_complete`` do besides MPI (the packing
+    micro-benchmark times it in compiled code, as a call from Python costs microseconds itself)."""
+    for _ in range(repeats):
+        for i in range(plan.peer.shape[0]):
+            _transfer(plan, i, bx, by, tx, ty, bonds, out)
 
 
 @njit(cache=True, _nrt=False)

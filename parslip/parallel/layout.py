@@ -71,30 +71,64 @@ SITE_COST = 12.0
 
 
 @dataclass(frozen=True)
+class Drift:
+    """Where the interface rows stand, as the slabs and halos are built for them (a).
+
+    shift     D: the block's columns are placed at x-columns c + D when the lattice is cut into slabs, so each
+              rank's block columns sit over its own substrate columns however far the block has slid (the
+              block's slabs follow the drift; nodes migrate between ranks by global id when D changes)
+    top       (lo, hi): the range that u_x - D of the block's interface sites may take, skin included
+    bottom    (lo, hi): the range that u_x of the substrate's interface sites may take, skin included
+    """
+    shift: int = 0
+    top: tuple = (0.0, 0.0)
+    bottom: tuple = (0.0, 0.0)
+    skin: tuple = (0.0, 0.0, 0.0, 0.0)     # the room (a) each edge had when the box was made: top hi, top lo,
+                                           # bottom hi, bottom lo (the loop's drift slots' order)
+
+    @property
+    def edges(self) -> tuple:
+        """The box's edges, outward, in the drift slots' order: top hi, -top lo, bottom hi, -bottom lo (a)."""
+        return self.top[1], -self.top[0], self.bottom[1], -self.bottom[0]
+
+    @property
+    def extent(self) -> float:
+        """The widest relative slip (a) the box allows between a block site and a substrate site."""
+        return max(self.top[1] - self.bottom[0], self.bottom[1] - self.top[0], 0.0)
+
+
+@dataclass(frozen=True)
 class Reach:
-    """Halo widths in columns, from the interface geometry and the slip it must serve.
+    """Halo widths in columns of the two interface rows, from the interface geometry and the slip they serve.
 
     Every distance an interface update depends on is a distance in current x, wherever the substrate's
     sites have drifted from their columns:
-    link = ceil(max(delta_b, R + SEARCH_MARGIN)): how far, in a, one top-bottom interaction reaches (a
-        bond breaks at length delta_b; a free site looks at the substrate sites within R + SEARCH_MARGIN
-        of it, R the re-bonding length).
-    An exact bond update of a node needs the block's interface nodes within 4
-    links and the substrate sites within 3 links of it; a rank needs exact
-    updates for its own nodes and for the block's nodes bonded to its own
-    substrate sites (one more link).  The columns stored must hold these in
-    current x, so each halo adds the slip reach U, which bounds how far the
-    block's interface slides relative to the substrate's (not how far either
-    moves: a substrate that follows the block needs no wider halo):
-        top_site    = ceil(U) + 5 link + 1   (the block's interface row)
-        bottom_site = ceil(U) + 4 link + 1   (the substrate's interface row).
-    The loop checks every step that the halo covers these distances in the
-    current (slid) positions of both rows, and stops the run if not.
+    link = ceil(max(delta_b, R + SEARCH_MARGIN)): how far, in a, one top-bottom interaction reaches (a bond
+        breaks at length delta_b; a free site looks at the substrate sites within R + SEARCH_MARGIN of it, R
+        the re-bonding length).
+    An exact bond update of a node needs the block's interface nodes within 4 links and the substrate sites
+    within 3 links of it; a rank needs exact updates for its own nodes and for the block's nodes bonded to
+    its own substrate sites (one more link).  So the block's interface row must be stored over the current x
+    of the rank's own sites (both rows) plus ``top_cover`` = 5 links on each side, and the substrate's over
+    them plus ``bottom_cover`` = 4 links.
+
+    With a drift box (``Drift``: the block's sites at x-column c + D + [t_lo, t_hi], the substrate's at
+    c + [b_lo, b_hi]) a rank owning x-columns [c0, c1) has its own sites within
+    [c0 + min(t_lo, b_lo), c1 - 1 + max(t_hi, b_hi)], and covers them when its halos are, in columns,
+
+        top    (left, right) = (t_hi - min(t_lo, b_lo) + 5 link,  max(t_hi, b_hi) - t_lo + 5 link + 1)
+        bottom (left, right) = (b_hi - min(t_lo, b_lo) + 4 link,  max(t_hi, b_hi) - b_lo + 4 link + 1)
+
+    (``drift_reach``).  With an explicit slip reach U (``interface.slip_reach``: the relative slip bound,
+    no shift, no rebuild) both sides are U + 5 link + 1 and U + 4 link + 1 (``interface_reach``).  The
+    loop checks every step that the halo covers these distances in the current (slid) positions of both
+    rows, and stops the run if not.
     """
-    slip: float
+    slip: float                 # the relative slip (a) the widths serve
     link: int
-    top_site: int
-    bottom_site: int
+    top: tuple                  # (left, right) halo columns of the block's interface row
+    bottom: tuple               # (left, right) halo columns of the substrate's interface row
+    drift: Drift | None = None  # the drift box the widths serve; None: fixed (an explicit slip reach)
 
     @property
     def top_cover(self) -> int:
@@ -105,19 +139,74 @@ class Reach:
     def bottom_cover(self) -> int:
         return 4 * self.link
 
+    @property
+    def widest(self) -> int:
+        """The widest interface halo (columns): how far a rank's stored columns reach beyond its slab."""
+        return max(*self.top, *self.bottom, BULK_REACH)
+
+
+def link_of(rebond_length: float, delta_b: float) -> int:
+    """One top-bottom interaction's reach in whole a (``Reach``)."""
+    return int(math.ceil(max(delta_b, rebond_length + SEARCH_MARGIN)))
+
 
 def interface_reach(rebond_length: float, delta_b: float, slip: float) -> Reach:
-    link = int(math.ceil(max(delta_b, rebond_length + SEARCH_MARGIN)))
+    """Fixed, symmetric halos that serve a relative slip of at most ``slip`` a (``interface.slip_reach``)."""
+    link = link_of(rebond_length, delta_b)
     u = int(math.ceil(slip))
-    return Reach(slip=slip, link=link, top_site=u + 5 * link + 1, bottom_site=u + 4 * link + 1)
+    return Reach(slip=slip, link=link, top=(u + 5 * link + 1,) * 2, bottom=(u + 4 * link + 1,) * 2)
 
 
-def column_cost(lattice: Lattice) -> np.ndarray:
-    """Estimated time per step of each global column, in node updates."""
-    cost = lattice.col_count.astype(float)
-    if lattice.has_interface:
-        t = lattice.top
-        cost[t.col0:t.col0 + t.cols] += SITE_COST
+def _outward(v: float, quanta: int) -> float:
+    """v rounded up to the next multiple of 1/quanta."""
+    return math.ceil(v * quanta) / quanta
+
+
+def start_box(skin: tuple) -> Drift:
+    """The drift box before anything has slid: ``skin`` = (behind, ahead) a around no drift."""
+    behind, ahead = skin
+    return Drift(0, (-behind, ahead), (-behind, ahead), (ahead, behind, ahead, behind))
+
+
+def follow_box(drift: Drift, extremes, growth, skin: tuple, quanta: int) -> Drift:
+    """The drift box a rebuild makes from the agreed drift: ``extremes`` the interface rows' outward extremes
+    relative to ``drift.shift`` (a: top hi, -top lo, bottom hi, -bottom lo), ``growth`` their growth over the
+    last agreement interval (a, same order), ``skin`` = (behind, ahead) a.
+
+    The new shift D centres the block's interface sites over the substrate's (the middle of its range less
+    the middle of the substrate's, rounded), so each rank's block columns sit over its own substrate columns;
+    each edge then gets its skin, ahead or behind the drive's direction (+x), widened to four times its
+    edge's growth so that a fast slip is not rebuilt at every agreement; edges on multiples of 1/quanta a."""
+    t_hi, t_lo = extremes[0] + drift.shift, -extremes[1] + drift.shift
+    b_hi, b_lo = extremes[2], -extremes[3]
+    shift = int(round(0.5 * (t_lo + t_hi) - 0.5 * (b_lo + b_hi)))
+    behind, ahead = skin
+    room = tuple(max(s, 4.0 * g) for s, g in zip((ahead, behind, ahead, behind), growth))
+    top = (-_outward(-(t_lo - shift - room[1]), quanta), _outward(t_hi - shift + room[0], quanta))
+    bottom = (-_outward(-(b_lo - room[3]), quanta), _outward(b_hi + room[2], quanta))
+    return Drift(shift, top, bottom, room)
+
+
+def drift_reach(link: int, drift: Drift) -> Reach:
+    """The halos that cover the drift box ``drift`` (``Reach``)."""
+    (tl, th), (bl, bh) = drift.top, drift.bottom
+    lo, hi = min(tl, bl), max(th, bh)
+    c = math.ceil
+    return Reach(slip=drift.extent, link=link, drift=drift,
+                 top=(c(th - lo) + 5 * link, c(hi - tl) + 5 * link + 1),
+                 bottom=(c(bh - lo) + 4 * link, c(hi - bl) + 4 * link + 1))
+
+
+def column_cost(lattice: Lattice, shift: int = 0) -> np.ndarray:
+    """Estimated time per step of each x-column, in node updates, with the block's columns placed at
+    x-columns c + ``shift`` (those beyond the lattice's ends at its first or last column)."""
+    cost = np.zeros(lattice.ncols)
+    for b, blk in enumerate(lattice.blocks):
+        if not lattice.numbered[b] or blk.rows == 0:
+            continue
+        x = np.clip(np.arange(blk.col0, blk.col0 + blk.cols) + (shift if b == TOP else 0), 0, lattice.ncols - 1)
+        per = blk.rows + (SITE_COST if b == TOP and lattice.has_interface else 0.0)
+        np.add.at(cost, x, per)
     return cost
 
 
@@ -199,7 +288,11 @@ class Peer:
 
 @dataclass
 class Layout:
-    """One rank's view of the decomposition."""
+    """One rank's view of the decomposition.
+
+    ``bounds`` cut the x-columns into slabs; block b's column c stands at x-column c + ``offsets[b]`` (the
+    drift box's shift for the sliding block, 0 for the substrate), so each block's OWNED columns are the
+    rank's slab moved back by its offset (``block_columns``)."""
     rank: int
     size: int
     bounds: np.ndarray
@@ -207,35 +300,64 @@ class Layout:
     blocks: tuple               # BlockLayout for BOTTOM, TOP (BOTTOM has rows = 0 for a free block)
     peers: list
     tasks: np.ndarray           # [ntasks] of TASK_DTYPE: the row schedule of one step
+    offsets: tuple = (0, 0)     # x-column offset of each block's columns (BOTTOM, TOP)
 
     @property
     def col_range(self) -> tuple[int, int]:
+        """The rank's slab in x-columns; with no offset, its global columns in both blocks."""
         return int(self.bounds[self.rank]), int(self.bounds[self.rank + 1])
+
+    def block_columns(self, b: int) -> tuple[int, int]:
+        """Global columns [lo, hi) of block b this rank owns (lo == hi: none)."""
+        lo, hi = self.blocks[b].owned[0] if self.blocks[b].rows else (0, 0)
+        return int(lo), int(hi)
 
     def owned_sites(self) -> tuple[int, int]:
         """Global columns [lo, hi) of the block's interface sites this rank owns."""
-        lo, hi = self.blocks[TOP].owned[0]
-        return int(lo), int(hi)
+        return self.block_columns(TOP)
 
 
-def _halo(lattice: Lattice, b: int, r: int, reach: Reach | None) -> int:
+def slab_columns(lattice: Lattice, bounds: np.ndarray, p: int, b: int, offset: int) -> tuple[int, int]:
+    """Global columns [lo, hi) of block b in rank p's slab: its x-columns moved back by the block's
+    ``offset``, the first slab reaching back and the last reaching on to the block's ends (a block slid past
+    the substrate's ends stays with the end ranks).  Not clipped to the block: a rank stores a block's halo
+    next to its slab even where it owns none of the block's columns."""
+    blk = lattice.blocks[b]
+    last = len(bounds) - 2
+    lo = int(bounds[p]) - offset
+    hi = int(bounds[p + 1]) - offset
+    if p == 0:
+        lo = min(lo, blk.col0)
+    if p == last:
+        hi = max(hi, blk.col0 + blk.cols)
+    return lo, hi
+
+
+def owner_of(bounds: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The rank whose slab holds x-column x (x beyond the ends: the end ranks)."""
+    return np.clip(np.searchsorted(bounds, x, side="right") - 1, 0, len(bounds) - 2)
+
+
+def _halo(lattice: Lattice, b: int, r: int, reach: Reach | None) -> tuple[int, int]:
+    """(left, right) halo columns of row r of block b."""
     if reach is not None and lattice.has_interface:
         if b == TOP and r == 0:
-            return max(reach.top_site, BULK_REACH)
+            return max(reach.top[0], BULK_REACH), max(reach.top[1], BULK_REACH)
         if b == BOTTOM and r == lattice.bottom.rows - 1:
-            return max(reach.bottom_site, BULK_REACH)
-    return BULK_REACH
+            return max(reach.bottom[0], BULK_REACH), max(reach.bottom[1], BULK_REACH)
+    return BULK_REACH, BULK_REACH
 
 
 def _block_layout(lattice: Lattice, b: int, c0: int, c1: int, reach: Reach | None, serial: bool) -> BlockLayout:
+    """Block b on a rank whose slab holds the block's columns [c0, c1) (``slab_columns``)."""
     blk = lattice.blocks[b]
     span = (blk.col0, blk.col0 + blk.cols)
     owned = np.zeros((blk.rows, 2), np.int64)
     stored = np.zeros((blk.rows, 2), np.int64)
     for r in range(blk.rows):
         owned[r] = _clip(c0, c1, *span)
-        h = 0 if serial else _halo(lattice, b, r, reach)
-        stored[r] = _clip(c0 - h, c1 + h, *span)
+        h_lo, h_hi = (0, 0) if serial else _halo(lattice, b, r, reach)
+        stored[r] = _clip(c0 - h_lo, c1 + h_hi, *span)
     nonempty = stored[:, 1] > stored[:, 0]
     base = (int(stored[nonempty, 0].min()) if nonempty.any() else span[0]) - PAD
     top = (int(stored[nonempty, 1].max()) if nonempty.any() else span[0]) + PAD
@@ -360,52 +482,71 @@ def task_ranges(tasks: np.ndarray) -> np.ndarray:
 
 
 def build_layout(lattice: Lattice, rank: int, size: int, reach: Reach | None, mode: str = "none",
-                 cost: np.ndarray | None = None) -> Layout:
-    """The decomposition seen from ``rank`` of ``size``.  Raises ConfigError if it cannot be cut."""
-    bounds = partition(column_cost(lattice) if cost is None else cost, size)
+                 cost: np.ndarray | None = None, bounds: np.ndarray | None = None) -> Layout:
+    """The decomposition seen from ``rank`` of ``size``.  Raises ConfigError if it cannot be cut.
+
+    The sliding block's columns stand at x-columns c + D (D = ``reach.drift.shift``, 0 without a drift box);
+    the slabs balance the cost of that placement (``column_cost``) unless ``bounds`` are given.  Only the
+    ranks whose slabs lie within the widest halo of this rank's are looked at: the set-up of one rank does
+    not grow with the rank count."""
+    shift = reach.drift.shift if reach is not None and reach.drift is not None else 0
+    offsets = (0, shift)
+    if bounds is None:
+        bounds = partition(column_cost(lattice, shift) if cost is None else cost, size)
     if bounds is None:
         raise ConfigError(f"ranks = {size}: the lattice has {lattice.ncols} columns and every slab needs at "
                           f"least one; accepted: 1 to {lattice.ncols} ranks")
     serial = size == 1
 
     def blocks_of(p):
-        c0, c1 = int(bounds[p]), int(bounds[p + 1])
-        return tuple(_block_layout(lattice, b, c0, c1, reach, serial) for b in (BOTTOM, TOP))
+        return tuple(_block_layout(lattice, b, *slab_columns(lattice, bounds, p, b, offsets[b]), reach, serial)
+                     for b in (BOTTOM, TOP))
 
     mine = blocks_of(rank)
     peers = []
-    for p in range(size):
+    reach_cols = (reach.widest if reach is not None else BULK_REACH) + 1
+    first, last = owner_of(bounds, np.array([bounds[rank] - reach_cols, bounds[rank + 1] - 1 + reach_cols]))
+    for p in range(int(first), int(last) + 1):
         if p == rank:
             continue
-        theirs = blocks_of(p)
-        peer = Peer(p)
-        for b in (BOTTOM, TOP):
-            if b == BOTTOM and lattice.rigid:
-                continue              # the rigid substrate never moves: nothing to send
-            for r in range(mine[b].rows):
-                s = _intersect(mine[b].owned[r], theirs[b].stored[r])
-                if s:
-                    peer.send.append(Segment(b, r, *s))
-                    if b == TOP and r == 0 and lattice.has_interface:
-                        peer.send_sites.append(s)
-                v = _intersect(theirs[b].owned[r], mine[b].stored[r])
-                if v:
-                    peer.recv.append(Segment(b, r, *v))
-                    if b == TOP and r == 0 and lattice.has_interface:
-                        peer.recv_sites.append(v)
+        peer = _peer(lattice, p, mine, blocks_of(p))
         if peer.send or peer.recv:
             peers.append(peer)
     tasks = _tasks(lattice, mine, peers, mode)
-    return Layout(rank=rank, size=size, bounds=bounds, reach=reach, blocks=mine, peers=peers, tasks=tasks)
+    return Layout(rank=rank, size=size, bounds=bounds, reach=reach, blocks=mine, peers=peers, tasks=tasks,
+                  offsets=offsets)
 
 
-def owned_site_counts(lattice: Lattice, bounds: np.ndarray) -> np.ndarray:
-    """Interface sites of the block each rank owns, from the slab bounds alone (every rank can compute
-    every rank's count: the frame buffer is sized from it, the same on all ranks)."""
+def _peer(lattice: Lattice, p: int, mine, theirs) -> Peer:
+    """What this rank sends rank p (its OWNED columns p keeps as HALO) and receives from it, per block row."""
+    peer = Peer(p)
+    for b in (BOTTOM, TOP):
+        if b == BOTTOM and lattice.rigid:
+            continue              # the rigid substrate never moves: nothing to send
+        for r in range(mine[b].rows):
+            s = _intersect(mine[b].owned[r], theirs[b].stored[r])
+            if s:
+                peer.send.append(Segment(b, r, *s))
+                if b == TOP and r == 0 and lattice.has_interface:
+                    peer.send_sites.append(s)
+            v = _intersect(theirs[b].owned[r], mine[b].stored[r])
+            if v:
+                peer.recv.append(Segment(b, r, *v))
+                if b == TOP and r == 0 and lattice.has_interface:
+                    peer.recv_sites.append(v)
+    return peer
+
+
+def owned_site_counts(lattice: Lattice, bounds: np.ndarray, shift: int = 0) -> np.ndarray:
+    """Interface sites of the block each rank owns, from the slab bounds and the block's shift alone (every
+    rank can compute every rank's count: the frame buffer is sized from it, the same on all ranks)."""
     if not lattice.has_interface:
         return np.zeros(len(bounds) - 1, np.int64)
     lo, hi = lattice.top.col0, lattice.top.col0 + lattice.top.cols
-    return np.clip(np.minimum(bounds[1:], hi) - np.maximum(bounds[:-1], lo), 0, None).astype(np.int64)
+    a = np.asarray(bounds[:-1], np.int64) - shift
+    z = np.asarray(bounds[1:], np.int64) - shift
+    a[0], z[-1] = min(a[0], lo), max(z[-1], hi)
+    return np.clip(np.minimum(z, hi) - np.maximum(a, lo), 0, None).astype(np.int64)
 
 
 def max_ranks(lattice: Lattice) -> int:

@@ -17,6 +17,8 @@ NullPlan = namedtuple("NullPlan", "ranks")
 # with the pad), and a run of interface sites:
 SEGMENT = np.dtype([("block", np.int64), ("row", np.int64), ("j0", np.int64), ("n", np.int64)])
 SITES = np.dtype([("j0", np.int64), ("n", np.int64)])
-# ``travel``: the indices of the bond table's rows that travel (``model.interface.BONDS.travel``).
+# ``travel``: the indices of the bond table's rows that travel (``model.interface.BONDS.travel``); ``rflags``:
+# the reduction's receive buffer (and MPI_Testall's flag), REDUCE_WORDS int64: the loop's flags must fit.
+REDUCE_WORDS = 32
 Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "
                           "req status handles rflags travel")

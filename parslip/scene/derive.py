@@ -17,7 +17,7 @@ from ..model.interface import InterfaceLaw
 from ..model.lattice import Lattice
 from ..model.physics import Material
 from ..model.stability import omega_max as _omega_max
-from ..parallel.layout import Reach, interface_reach, max_ranks
+from ..parallel.layout import Reach, drift_reach, interface_reach, link_of, max_ranks, start_box
 from . import limits
 
 
@@ -40,8 +40,9 @@ class Setup:
     frame_every: int
     snapshot_steps: tuple     # drive steps of the snapshots, first at 0, last at n_drive
     v0: float                # internal units
-    slip_reach: float        # a
-    reach: Reach             # halo widths that serve the slip reach
+    slip_reach: float        # a: the explicit slip reach (interface.slip_reach), 0 when the halos follow the slip
+    reach: Reach             # halo widths that serve the slip reach, or the first drift box (``parallel.layout``)
+    skin: tuple              # (behind, ahead) a: how far a drift box reaches beyond the slip reached
     precision: str           # "float64" or "float32"
     law: InterfaceLaw        # the interface bonds: parameters and rules (``model.interface``)
     drive: Drive             # the loading: mode, speed, phases (``model.drive``)
@@ -96,6 +97,14 @@ def omega_max_cached(lat: Lattice, kn, kt, kx: float, ky: float, spring: float =
     return value
 
 
+def halo_skin(skin: float, link: int, driven: bool) -> tuple[float, float]:
+    """(behind, ahead) skin of the drift box (a): ``interface.halo_skin`` ahead (0: 4 links), and behind a quarter
+    of it but at least one link when a drive fixes the direction of slip (every drive slides the block towards
+    +x), the same both ways without one."""
+    ahead = float(skin) if skin > 0 else 4.0 * link
+    return (max(ahead / 4.0, float(link)) if driven else ahead), ahead
+
+
 def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     """Derived quantities of a resolved scene.  Raises ConfigError on an unstable dt or a drive the
     engine would take for a blow-up (``limits.check_setup``)."""
@@ -126,13 +135,15 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     frame_every = max(1, int(math.floor(frame_dt / dt + 1e-9)))
     nsnap = scene["output.snapshots"] if scene["output.fields"] == "all" else 0
     snaps = () if nsnap == 0 else tuple(sorted({int(round(j * n_drive / nsnap)) for j in range(nsnap + 1)}))
-    reach = scene["interface.slip_reach"]
-    if reach == 0:
-        reach = drive.travel(mat.c_r, t_unit) + 2.0
+    slip = scene["interface.slip_reach"]
+    link = link_of(law.rebond_length, big["delta_b"])
+    skin = halo_skin(scene["interface.halo_skin"], link, drive.on)
+    reach = (interface_reach(law.rebond_length, big["delta_b"], slip) if slip > 0 else
+             drift_reach(link, start_box(skin)))
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=drive.speed(mat.c_r),
-               slip_reach=reach, reach=interface_reach(law.rebond_length, big["delta_b"], reach),
+               slip_reach=slip, reach=reach, skin=skin,
                precision=scene["time.precision"], law=law, drive=drive, damping=damping)
     limits.check_setup(st)
     return st

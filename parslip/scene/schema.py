@@ -109,9 +109,14 @@ SCHEMA: dict[str, Key] = {
     "interface.contact": Key(0.0, float, "m c^2/a^2", ">= 0 (0 = none, the paper)", _range(0.0),
                              "stiffness of the frictionless contact that keeps an unbonded top site at least "
                              "delta0 above the substrate's surface (a one-sided spring; enters omega_max)"),
-    "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
-                                "largest slip of the block's interface relative to the substrate's that the MPI "
-                                "halo must reach across"),
+    "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: the halos follow the slip reached)", _range(0.0),
+                                "with several ranks: 0, the slabs and halos follow the interface's slip as it "
+                                "grows (rebuilt when it nears the halo's edge); > 0, fixed halos that serve this "
+                                "largest slip of the block's interface relative to the substrate's"),
+    "interface.halo_skin": Key(0.0, float, "a", ">= 0 (0 = auto: 4 links ahead, 1 behind the drive)", _range(0.0),
+                               "with several ranks and an automatic slip reach: how far beyond the slip reached "
+                               "the interface halos reach in the direction of slip (a quarter of it against it, "
+                               "at least one link); they are rebuilt once the slip comes within half of it"),
     # load and drive -------------------------------------------------------------
     "load.FN": Key(1.0, float, "m c^2/a", ">= 0", _range(0.0),
                    "total normal load, spread evenly over the top row SR"),

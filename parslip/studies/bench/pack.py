@@ -1,0 +1,66 @@
+"""The halo exchange's packing, timed apart from MPI: ns per value packed and unpacked.
+
+    python -m parslip.studies.bench.pack run/push_l1000.toml --ranks 64 --rank 20
+
+For one rank of a decomposition (its layout and exchange plan, ``parallel.halo_mpi``), arrays of the
+state's shape are packed into the send buffer and unpacked from the receive buffer as ``mpi_post`` and
+``mpi_complete`` do, many times over; the time of a pack and an unpack of every peer's message over the
+values each carries is the cost per value the scaling model's ``b`` stands for (``studies.bench.scaling``),
+measured directly rather than fitted.  No message is sent: MPI's own copy is left out.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+
+
+def measure(setup, ranks: int, rank: int, seconds: float = 1.0) -> dict:
+    """ns per value of packing and of unpacking rank ``rank``'s messages (median of repeats)."""
+    from ...parallel.halo_mpi import build_plan, pack_all
+    from ...parallel.layout import build_layout
+    lay = build_layout(setup.lattice, rank, ranks, setup.reach, setup.drive.mode)
+    plan = build_plan(lay, np.float64)
+    bl, tl = lay.blocks
+    rng = np.random.default_rng(0)
+    bx, by = rng.standard_normal(bl.shape), rng.standard_normal(bl.shape)
+    tx, ty = rng.standard_normal(tl.shape), rng.standard_normal(tl.shape)
+    bonds = rng.standard_normal((7, tl.width))
+    sent, received = int(plan.sbuf.shape[0]), int(plan.rbuf.shape[0])
+    out = {"ranks": ranks, "rank": rank, "peers": int(plan.peer.shape[0]), "values_sent": sent,
+           "values_received": received}
+    for name, direction, values in (("pack", True, sent), ("unpack", False, received)):
+        pack_all(plan, bx, by, tx, ty, bonds, direction, 1)         # compile, warm the caches
+        reps = max(1, int(1e5 / max(values, 1)))
+        times = []
+        t_end = time.perf_counter() + seconds
+        while time.perf_counter() < t_end or len(times) < 5:
+            t0 = time.perf_counter_ns()
+            pack_all(plan, bx, by, tx, ty, bonds, direction, reps)
+            times.append((time.perf_counter_ns() - t0) / reps)
+        out[f"{name}_ns_per_value"] = float(np.median(times)) / max(values, 1)
+    out["ns_per_value"] = (out["pack_ns_per_value"] * sent + out["unpack_ns_per_value"] * received) / max(
+        sent + received, 1)
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m parslip.studies.bench.pack", description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", help="scene file")
+    p.add_argument("--ranks", type=int, default=2)
+    p.add_argument("--rank", type=int, default=None, help="which rank (default: the middle one)")
+    p.add_argument("--seconds", type=float, default=1.0)
+    p.add_argument("--set", action="append", default=[])
+    a = p.parse_args(argv)
+    from ...scene.derive import derive
+    from ...scene.load import load
+    st = derive(load(a.scene, a.set))
+    print(json.dumps(measure(st, a.ranks, a.ranks // 2 if a.rank is None else a.rank, a.seconds)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
