@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -70,6 +71,22 @@ def test_the_shipped_scenes_set_up_numbers_are_the_stored_bits(tmp_path):
     got = _setup_numbers(tmp_path)
     assert got.pop("random_field") == RANDOM_FIELD
     assert got == STORED
+
+
+def test_omega_max_is_rounded_up_to_24_significant_bits():
+    """round_up: never below its argument, less than 2^-23 above it, 24 significant bits at most, and a
+    value that already has them unchanged (so rounding twice is rounding once)."""
+    import random
+
+    from parslip.model.stability import round_up
+    rng = random.Random(5)
+    for x in [rng.uniform(0.1, 1e4) for _ in range(2000)] + [24.45511710235529, 2.0 ** 40, 1.5, 0.75]:
+        r = round_up(x)
+        assert x <= r < x * (1 + 2.0 ** -23)
+        m, _ = math.frexp(r)
+        assert math.ldexp(m, 24) == int(math.ldexp(m, 24))
+        assert round_up(r) == r
+    assert round_up(1.0 + 2.0 ** -52) == 1.0 + 2.0 ** -23
 
 
 def _without_vector_paths() -> dict:
