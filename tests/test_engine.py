@@ -234,7 +234,7 @@ def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
     interface kernel after engine/kernels/interface.py changed.  The cache folder is keyed by the kernels'
     sources (io.cache.kernel_sources: the modules with compiled code and every module they import), so
     changing interface.py alone moves it, as does a module whose constants the loop freezes in
-    (parallel/layout.py); a change to what only Python runs (the analysis, the run's orchestration in
+    (parallel/codes.py); a change to what only Python runs (the analysis, the run's orchestration in
     engine/simulation.py) does not."""
     import shutil
     import subprocess
@@ -250,14 +250,14 @@ def test_a_changed_kernel_gets_a_fresh_numba_cache(tmp_path):
                               check=True).stdout.strip()
     first = where()
     assert first.startswith(str(tmp_path / "nc"))
-    for name in ("analysis/fronts.py", "engine/simulation.py", "engine/runner.py"):
+    for name in ("analysis/fronts.py", "engine/simulation.py", "engine/runner.py", "parallel/layout.py"):
         (copy / name).write_text((copy / name).read_text() + "\n# x\n")
         assert where() == first, name
     (copy / "engine" / "kernels" / "interface.py").write_text(
         (copy / "engine" / "kernels" / "interface.py").read_text() + "\n# a change\n")
     second = where()
     assert second != first
-    (copy / "parallel" / "layout.py").write_text((copy / "parallel" / "layout.py").read_text() + "\n# a change\n")
+    (copy / "parallel" / "codes.py").write_text((copy / "parallel" / "codes.py").read_text() + "\n# a change\n")
     assert where() not in (first, second)
 
 

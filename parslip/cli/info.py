@@ -156,7 +156,22 @@ def _cost_lines(st, ranks: int) -> list[str]:
                 f"block's slabs move with it, its halos reach {st.skin[1]:.3g} a beyond it ahead and "
                 f"{st.skin[0]:.3g} a behind")
     out.append(_line("ranks", f"1 to {st.max_ranks()} (slabs of whole columns; {halo})"))
+    if ranks > 1:
+        m = scaling_figures(st, ranks, writer)
+        out.append(_line("scaling", f"per step on the busiest rank over the whole travel: {m['step_us_compute']:.1f} "
+                                    f"us of compute, {m['step_us_predicted']:.1f} us predicted (efficiency "
+                                    f"{m['efficiency_predicted']:.2f}); {m['peers_max']} peers, "
+                                    f"{m['halo_values_per_step']} halo values, {m['foreign_sites_max']} interface "
+                                    f"sites beyond its own; rank 0's memory {m['rank0_memory_ratio']:.2f} x the "
+                                    f"median rank's ({m['coefficients']})"))
     return out
+
+
+def scaling_figures(st, ranks: int, writer: str) -> dict:
+    """The scaling model's figures (``studies.bench.scaling.travel_model``) with this host's measured
+    coefficients where `parslip bench` stored them, else the defaults."""
+    from ..studies.bench.scaling import travel_model, coefficients
+    return travel_model(st, ranks, coefficients(st.precision), gather=writer == "gather")
 
 
 def _preset_lines(st, scene_path: str, sets) -> list[str]:
@@ -199,5 +214,12 @@ def cmd_info(args) -> int:
     if not 1 <= ranks <= st.max_ranks():
         raise ConfigError(f"--ranks {ranks}: accepted: 1 to {st.max_ranks()} (every rank owns a column of the "
                           f"lattice)")
+    if args.json:
+        import json
+        from ..io.output import hdf5_mode
+        fig = scaling_figures(st, ranks, hdf5_mode(ranks))
+        print(json.dumps({"scene": args.scene, "nodes": st.lattice.n_nodes, "dt": st.dt, "steps": st.n_steps,
+                          **fig}))
+        return 0
     print("\n".join(report(st, args.scene, ranks, args.set)))
     return 0

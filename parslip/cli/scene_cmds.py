@@ -21,6 +21,8 @@ def register(sub) -> None:
     i.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     i.add_argument("--ranks", type=int, default=1, metavar="N",
                    help="rank count the memory and wall-time estimates are for (default 1)")
+    i.add_argument("--json", action="store_true",
+                   help="print one JSON object (the scaling model's figures on --ranks, the memory) and nothing else")
     i.set_defaults(func=cmd_info)
     k = sub.add_parser("keys", help="every scene key with default, units and accepted range")
     k.set_defaults(func=cmd_keys)

@@ -51,7 +51,7 @@ from numba import njit
 from ..model.drive import DRIVE_SPRING, DRIVE_X, DRIVE_XY  # noqa: F401  (the drive word's bits, ``model.drive``)
 from ..parallel.exchange import complete, post, progress, reduce_max
 from ..parallel.plans import REDUCE_WORDS
-from ..parallel.layout import ALL_BONDS, EARLY, END, FULL, LATE, MASKED, NO_DOWN, NO_UP, NODES, PAD, ROWS
+from ..parallel.codes import ALL_BONDS, EARLY, END, FULL, LATE, MASKED, NO_DOWN, NO_UP, NODES, PAD, ROWS
 from .kernels import budget as bg
 from .kernels import interface as ik
 from .kernels.clock import now_ns

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import NonFiniteError, SlipReachError
 from ..model.interface import BONDS
 from ..model.lattice import TOP
-from ..parallel.exchange import build_plan
+from ..parallel.exchange import build_plan, release
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 from ..parallel.migrate import NODES, SITES, Placement, block_columns, redistribute
 # RUNAWAY_JUMP (a): a node that moves this far in one step is running away.  It lives with the scene
@@ -94,6 +94,8 @@ class Simulation:
         counts = owned_site_counts(lat, layout.bounds, layout.offsets[1])
         self.event_limit, capacity = event_room(int(counts[rank]) if lat.has_interface else 0, self.buffer_events)
         self.state = State(st, layout, self.dtype, event_capacity=capacity)
+        if getattr(self, "plan", None) is not None:
+            release(self.plan)
         self.plan = build_plan(layout, self.dtype, self.comm)
         self.sched = L.Schedule(tasks=layout.tasks, ptr=task_ranges(layout.tasks))
         drift = layout.reach.drift if layout.reach is not None else None

@@ -133,3 +133,26 @@ def use_kernel_cache() -> None:
     """Point numba's cache at ``kernel_cache_dir()``; called before any kernel is compiled or loaded."""
     import numba
     numba.config.CACHE_DIR = kernel_cache_dir()
+
+
+COEFFICIENTS = "coefficients.json"
+
+
+def load_coefficients() -> dict | None:
+    """The scaling model's coefficients `parslip bench` measured on this host (``store_coefficients``), or None."""
+    try:
+        with open(os.path.join(cache_dir(), COEFFICIENTS)) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def store_coefficients(values: dict) -> str:
+    """Keep the scaling model's measured coefficients for `parslip info` (atomic replace); returns the path."""
+    path = os.path.join(cache_dir(), COEFFICIENTS)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".coefficients-", suffix=".json")
+    with os.fdopen(fd, "w") as f:
+        json.dump(values, f, indent=1)
+    os.replace(tmp, path)
+    return path

@@ -35,6 +35,13 @@ def build_plan(layout, dtype, comm=None):
     return halo_mpi.build_plan(layout, dtype, comm)
 
 
+def release(plan) -> None:
+    """Free what a plan holds in MPI (its persistent requests); nothing on one rank."""
+    if not isinstance(plan, NullPlan):
+        from .halo_mpi import release as free
+        free(plan)
+
+
 def _compiled_only(*args):
     raise TypeError("the exchange phases run in compiled code; from Python call parslip.parallel.halo_mpi's "
                     "mpi_post, mpi_complete, mpi_progress, mpi_reduce_max with an MPI plan")

@@ -3,12 +3,12 @@
 Imported only for a communicator of more than one rank (``exchange.build_plan``):
 importing it loads the MPI library mpi4py uses (``parallel.mpi``).
 
-For every peer, ``mpi_post`` packs the OWNED values the peer keeps as HALO
-and posts MPI_Irecv and MPI_Isend; ``mpi_complete`` waits (MPI_Waitall) and
-unpacks into the HALO copies; ``mpi_progress`` tests the requests so MPI
+For every peer, ``mpi_post`` starts the receive, packs the OWNED values the peer keeps as HALO and
+starts the send (persistent requests, made once per plan: MPI_Recv_init,
+MPI_Send_init); ``mpi_complete`` waits (MPI_Waitall) and unpacks into the HALO copies; ``mpi_progress`` tests the requests so MPI
 moves the messages while the loop computes; ``mpi_reduce_max`` takes the MAX
 of the loop's flags over all ranks (MPI_Allreduce).  One message per peer
-per step carries every row segment's x then y, then, for each run of
+per step carries every rectangle of row segments' x then y, then, for each run of
 interface sites, the travelling rows of the bond table
 (``model.interface.BONDS.travel``, ``Plan.travel``) one after the other.  The bond
 table is in the state's float type: integers (partners) are exact below
@@ -16,6 +16,7 @@ table is in the state's float type: integers (partners) are exact below
 """
 from __future__ import annotations
 
+import atexit
 
 import numpy as np
 from numba import njit
@@ -39,14 +40,21 @@ def build_plan(layout, dtype, comm=None) -> Plan:
     def segs(lists, with_block):
         rows, ptr = [], [0]
         for lst in lists:
+            start = len(rows)
             for sg in lst:
                 if with_block:
                     b = blocks[sg.block]
-                    rows.append((sg.block, b.prow(sg.row), b.j(sg.lo), sg.hi - sg.lo))
+                    new = [sg.block, b.prow(sg.row), 1, b.j(sg.lo), sg.hi - sg.lo]
+                    last = rows[-1] if len(rows) > start else None
+                    # The next row of the same block over the same columns: the rectangle grows by a row.
+                    if last and last[0] == new[0] and last[1] + last[2] == new[1] and last[3:] == new[3:]:
+                        last[2] += 1
+                    else:
+                        rows.append(new)
                 else:
                     rows.append((blocks[TOP].j(sg[0]), sg[1] - sg[0]))
             ptr.append(len(rows))
-        return np.array(rows, SEGMENT if with_block else SITES), np.array(ptr, np.int64)
+        return np.array([tuple(r) for r in rows], SEGMENT if with_block else SITES), np.array(ptr, np.int64)
 
     ss, ss_ptr = segs([p.send for p in peers], True)
     rs, rs_ptr = segs([p.recv for p in peers], True)
@@ -57,19 +65,88 @@ def build_plan(layout, dtype, comm=None) -> Plan:
         out = [0]
         for i in range(len(peers)):
             sites = int(sseg["n"][sptr[i]:sptr[i + 1]].sum())
-            n = 2 * int(seg["n"][ptr[i]:ptr[i + 1]].sum()) + len(BONDS.travel) * sites
+            n = 2 * int((seg["n"] * seg["rows"])[ptr[i]:ptr[i + 1]].sum()) + len(BONDS.travel) * sites
             out.append(out[-1] + n)
         return np.array(out, np.int64)
 
     sb_ptr = sizes(ss, ss_ptr, sts, sts_ptr)
     rb_ptr = sizes(rs, rs_ptr, rts, rts_ptr)
     h = mpi.handles(comm, dtype) if comm is not None else np.zeros(4, mpi.HANDLE_DTYPE)
-    req = np.zeros(2 * len(peers), mpi.REQUEST_DTYPE)
+    sbuf, rbuf = np.zeros(sb_ptr[-1], dtype), np.zeros(rb_ptr[-1], dtype)
+    req = _persistent(comm, peers, sbuf, sb_ptr, rbuf, rb_ptr, dtype)
     status = np.zeros(max(1, 2 * len(peers)) * mpi.STATUS_BYTES, np.uint8)
     return Plan(peer=np.array([p.rank for p in peers], np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,
-                rs=rs, rs_ptr=rs_ptr, rts=rts, rts_ptr=rts_ptr, sbuf=np.zeros(sb_ptr[-1], dtype), sb_ptr=sb_ptr,
-                rbuf=np.zeros(rb_ptr[-1], dtype), rb_ptr=rb_ptr, req=req, status=status, handles=h,
+                rs=rs, rs_ptr=rs_ptr, rts=rts, rts_ptr=rts_ptr, sbuf=sbuf, sb_ptr=sb_ptr,
+                rbuf=rbuf, rb_ptr=rb_ptr, req=req, status=status, handles=h,
                 rflags=np.zeros(REDUCE_WORDS, np.int64), travel=np.array(BONDS.travel, np.int64))
+
+
+# The persistent requests of each plan (mpi4py's Prequest objects, by the id of the plan's request array):
+# made once, started every step from compiled code, freed with ``release``.
+_HELD: dict = {}
+
+
+def _persistent(comm, peers, sbuf, sb_ptr, rbuf, rb_ptr, dtype) -> np.ndarray:
+    """The plan's requests, [receive from each peer, send to each peer], as persistent requests over its
+    buffers (``MPI_Recv_init``, ``MPI_Send_init``): a step starts them and waits for them, with no request
+    made or matched anew.  Zeros without a communicator (a plan to inspect)."""
+    req = np.zeros(2 * len(peers), mpi.REQUEST_DTYPE)
+    if comm is None or not peers:
+        return req
+    from mpi4py import MPI
+    ftype = MPI.DOUBLE if np.dtype(dtype) == np.float64 else MPI.FLOAT
+    made = [comm.Recv_init([rbuf[rb_ptr[i]:rb_ptr[i + 1]], ftype], source=p.rank, tag=TAG) for i, p in enumerate(peers)]
+    made += [comm.Send_init([sbuf[sb_ptr[i]:sb_ptr[i + 1]], ftype], dest=p.rank, tag=TAG) for i, p in enumerate(peers)]
+    # MPICH's int handles come as unsigned numbers (as the communicator's in ``mpi.handles``): wrap them.
+    req[:] = np.array([MPI._handleof(r) % (1 << 64) for r in made], np.uint64).astype(mpi.REQUEST_DTYPE)
+    _HELD[id(req)] = (req, made)
+    return req
+
+
+def release(plan) -> None:
+    """Free the plan's persistent requests (none may be active: after ``mpi_complete``)."""
+    held = _HELD.pop(id(plan.req), None)
+    if held is not None:
+        for r in held[1]:
+            r.Free()
+
+
+@atexit.register
+def _release_all() -> None:
+    """Free the requests of the plans still held when the process ends, before mpi4py finalizes MPI (its exit
+    handler was registered first, so it runs after this one): MPI_Finalize would report each as leaked."""
+    from mpi4py import MPI
+    if MPI.Is_finalized():
+        return
+    for _, made in list(_HELD.values()):
+        for r in made:
+            r.Free()
+    _HELD.clear()
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _rect(buf, k, a, r0, rows, j0, n, out):
+    """Rows r0 .. r0 + rows - 1 of ``a``, n values each from column j0, into ``buf`` at k (``out``) one row
+    after the other, or back; returns k + rows n.  A column (n = 1, every bulk halo) is one strided loop."""
+    if n == 1:
+        if out:
+            for r in range(rows):
+                buf[k + r] = a[r0 + r, j0]
+        else:
+            for r in range(rows):
+                a[r0 + r, j0] = buf[k + r]
+        return k + rows
+    if out:
+        for r in range(r0, r0 + rows):
+            for j in range(n):
+                buf[k + j] = a[r, j0 + j]
+            k += n
+    else:
+        for r in range(r0, r0 + rows):
+            for j in range(n):
+                a[r, j0 + j] = buf[k + j]
+            k += n
+    return k
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -87,7 +164,7 @@ def _move(buf, k, a, r, j0, n, out):
 @njit(cache=True, _nrt=False)
 def _transfer(plan, i, bx, by, tx, ty, bonds, out):
     """Peer i's message: pack my OWNED values into the send buffer (``out``), or unpack its values
-    into my HALO copies: every row segment's x then y, then each run of interface sites' travelling
+    into my HALO copies: every rectangle's x then y, then each run of interface sites' travelling
     bond rows, one row after the other."""
     if out:
         buf, k, segs, lo, hi = plan.sbuf, plan.sb_ptr[i], plan.ss, plan.ss_ptr[i], plan.ss_ptr[i + 1]
@@ -97,13 +174,13 @@ def _transfer(plan, i, bx, by, tx, ty, bonds, out):
         sites, slo, shi = plan.rts, plan.rts_ptr[i], plan.rts_ptr[i + 1]
     for g in range(lo, hi):
         sg = segs[g]
-        b, r, j0, n = sg.block, sg.row, sg.j0, sg.n
+        b, r, rows, j0, n = sg.block, sg.row, sg.rows, sg.j0, sg.n
         if b == BOTTOM:
-            k = _move(buf, k, bx, r, j0, n, out)
-            k = _move(buf, k, by, r, j0, n, out)
+            k = _rect(buf, k, bx, r, rows, j0, n, out)
+            k = _rect(buf, k, by, r, rows, j0, n, out)
         else:
-            k = _move(buf, k, tx, r, j0, n, out)
-            k = _move(buf, k, ty, r, j0, n, out)
+            k = _rect(buf, k, tx, r, rows, j0, n, out)
+            k = _rect(buf, k, ty, r, rows, j0, n, out)
     for g in range(slo, shi):
         j0, n = sites[g].j0, sites[g].n
         for row in plan.travel:
@@ -142,25 +219,17 @@ def mpi_progress(plan):
 
 @njit(cache=True, _nrt=False)
 def mpi_post(plan, bx, by, tx, ty, bonds):
-    """MPI_Irecv from every peer, then pack and MPI_Isend to every peer; returns the OR of MPI error codes."""
+    """Start the receives from every peer, then pack and start the send to every peer (persistent
+    requests); returns the OR of MPI error codes."""
     npeer = plan.peer.shape[0]
     if npeer == 0:
         return 0
-    h = plan.handles
-    comm, ftype = h[mpi.H_COMM], h[mpi.H_FLOAT]
     rq = plan.req.ctypes.data
     isz = plan.req.itemsize
-    fsz = plan.sbuf.itemsize
-    err = 0
-    for i in range(npeer):
-        n = plan.rb_ptr[i + 1] - plan.rb_ptr[i]
-        err |= mpi.irecv(plan.rbuf.ctypes.data + plan.rb_ptr[i] * fsz, np.int32(n), ftype,
-                         np.int32(plan.peer[i]), np.int32(TAG), comm, rq + i * isz)
+    err = mpi.startall(np.int32(npeer), rq)
     for i in range(npeer):
         _transfer(plan, i, bx, by, tx, ty, bonds, True)
-        n = plan.sb_ptr[i + 1] - plan.sb_ptr[i]
-        err |= mpi.isend(plan.sbuf.ctypes.data + plan.sb_ptr[i] * fsz, np.int32(n), ftype,
-                         np.int32(plan.peer[i]), np.int32(TAG), comm, rq + (npeer + i) * isz)
+        err |= mpi.start(rq + (npeer + i) * isz)
     return err
 
 

@@ -37,29 +37,16 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.lattice import BOTTOM, TOP, Lattice
 
+# The codes the compiled loop reads (the pad, the row kinds, the task fields, the phases) live apart, in
+# ``parallel.codes``, so that the loop's compiled code does not depend on this module's bookkeeping.
+from .codes import (ALL_BONDS, EARLY, END, EXTRA_BOTTOM, EXTRA_NONE, EXTRA_TOP, FULL, LATE, MASKED, NO_DOWN,  # noqa: F401
+                    NO_UP, NODES, PAD, ROWS, SEARCH_MARGIN, TASK_DTYPE, TASK_FIELDS)
+
 LEFT, RIGHT = 0, 1
 SIDES = (LEFT, RIGHT)
 OWNED, HALO = "owned", "halo"
 
 BULK_REACH = 1
-PAD = 1                 # ghost rows and columns around each block's arrays
-
-# How much further than the re-bonding length R a free site looks for substrate sites (a): a margin
-# that keeps rounding out of the search (``kernels.interface._span``).
-SEARCH_MARGIN = 0.5
-
-# Row kinds of the schedule (the compiled loop has one loop per kind).
-FULL, NO_UP, NO_DOWN, MASKED = 0, 1, 2, 3
-# Extra per-column forces a row adds: none, the block's interface row, the substrate's interface row.
-EXTRA_NONE, EXTRA_TOP, EXTRA_BOTTOM = 0, 1, 2
-# Columns of a task row: block, row, first local column j0, node count n, row kind, bond mask (MASKED),
-# extra force, load (1: the normal load acts), drive (1: x prescribed once the drive runs), early (a peer
-# keeps these nodes), s (up/down neighbours of column c are c - 1 + s and c + s).
-TASK_FIELDS = ("block", "row", "j0", "n", "kind", "mask", "extra", "load", "drive", "early", "s")
-# The schedule is a structured array: the compiled loop reads a task's fields by name (``task.row``).
-TASK_DTYPE = np.dtype([(name, np.int64) for name in TASK_FIELDS])
-# Neighbour slots (bit k of a mask): 0 right, 1 up-right, 2 up-left, 3 left, 4 down-left, 5 down-right.
-ALL_BONDS = 0b111111
 # Row segments up to this many nodes run node by node (a vectorised loop's set-up costs more).
 SHORT = 4
 
@@ -460,10 +447,6 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
     return t[order]
 
 
-# The phases of a step's schedule (``task_ranges``): tasks a peer needs first, then the rest.
-EARLY, LATE = 0, 1
-# ptr[phase, block] holds [ROWS, NODES, END]: first row task, first single-node task, end.
-ROWS, NODES, END = 0, 1, 2
 
 
 def task_ranges(tasks: np.ndarray) -> np.ndarray:

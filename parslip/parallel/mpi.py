@@ -1,7 +1,8 @@
-"""MPI calls from compiled code: four functions of the MPI library mpi4py uses.
+"""MPI calls from compiled code: functions of the MPI library mpi4py uses.
 
-numba code calls ``MPI_Isend``, ``MPI_Irecv``, ``MPI_Waitall`` and
-``MPI_Allreduce`` by symbol name.  The library mpi4py loaded is made visible
+numba code calls ``MPI_Start``, ``MPI_Startall`` (the exchange's persistent requests, made once per plan by
+mpi4py), ``MPI_Waitall``, ``MPI_Testall`` and ``MPI_Allreduce`` (and ``MPI_Isend``, ``MPI_Irecv``) by
+symbol name.  The library mpi4py loaded is made visible
 to the JIT linker (``load_library_permanently``), so the compiled loop links
 against exactly the MPI that mpi4py initialised, and numba can cache it:
 nothing process-specific (no ctypes pointers) is baked into the code.
@@ -61,6 +62,8 @@ irecv = types.ExternalFunction("MPI_Irecv", _int(_ptr, _int, HANDLE, _int, _int,
 waitall = types.ExternalFunction("MPI_Waitall", _int(_int, _ptr, _ptr))
 testall = types.ExternalFunction("MPI_Testall", _int(_int, _ptr, _ptr, _ptr))
 allreduce = types.ExternalFunction("MPI_Allreduce", _int(_ptr, _ptr, _int, HANDLE, HANDLE, HANDLE))
+start = types.ExternalFunction("MPI_Start", _int(_ptr))
+startall = types.ExternalFunction("MPI_Startall", _int(_int, _ptr))
 
 
 # Slots of the handles array.

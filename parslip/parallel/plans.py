@@ -13,9 +13,10 @@ import numpy as np
 # One rank: nothing to exchange.  (numba needs a field; ``ranks`` is always 1.)
 NullPlan = namedtuple("NullPlan", "ranks")
 
-# The MPI plan (built by ``halo_mpi.build_plan``).  A row segment that travels (array row and columns,
-# with the pad), and a run of interface sites:
-SEGMENT = np.dtype([("block", np.int64), ("row", np.int64), ("j0", np.int64), ("n", np.int64)])
+# The MPI plan (built by ``halo_mpi.build_plan``).  A rectangle of row segments that travels (the first array
+# row and how many consecutive rows, and the columns, with the pad: a bulk halo of one column over every row
+# of a block is one rectangle, not a segment per row), and a run of interface sites:
+SEGMENT = np.dtype([("block", np.int64), ("row", np.int64), ("rows", np.int64), ("j0", np.int64), ("n", np.int64)])
 SITES = np.dtype([("j0", np.int64), ("n", np.int64)])
 # ``travel``: the indices of the bond table's rows that travel (``model.interface.BONDS.travel``); ``rflags``:
 # the reduction's receive buffer (and MPI_Testall's flag), REDUCE_WORDS int64: the loop's flags must fit.

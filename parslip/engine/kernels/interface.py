@@ -43,7 +43,7 @@ from numba import njit
 
 from ...model.interface import (BREAK, CAND, CLOCK, DELTA_B, FORM, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER,
                                 REBOND_FACING, REFORM_ZERO, X0)
-from ...parallel.layout import SEARCH_MARGIN
+from ...parallel.codes import SEARCH_MARGIN
 from . import budget as bg
 from .floats import like
 

@@ -264,6 +264,22 @@ class Coefficients:
     source: str = "defaults"
 
 
+def coefficients(precision: str = "float64") -> Coefficients:
+    """The coefficients `parslip bench` measured on this host (``io.cache``'s coefficients file), else the
+    defaults: the per-core throughput of ``scene.budget.THROUGHPUT``, a site at ``layout.SITE_COST`` node
+    updates, and the packing and fixed costs measured on the project's 2-core x86-64 host."""
+    from ...io.cache import load_coefficients
+    from ...parallel.layout import SITE_COST
+    from ...scene.budget import THROUGHPUT
+    node_ns = 1e9 / THROUGHPUT[precision]
+    base = Coefficients(node_ns=node_ns, site_ns=SITE_COST * node_ns)
+    stored = load_coefficients()
+    if not stored:
+        return base
+    known = {k: v for k, v in stored.items() if k in Coefficients.__dataclass_fields__}
+    return Coefficients(**{**base.__dict__, **known})
+
+
 def travel_shifts(setup, samples: int = 5) -> list[int]:
     """The block's shifts (columns) the travel model looks at: from none to the drive's whole travel, when the
     halos follow the slip; none when the scene fixes a slip reach (its slabs never move)."""
