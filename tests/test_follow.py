@@ -167,7 +167,7 @@ def test_migration_by_global_id_delivers_each_rank_what_it_owns():
 
 
 # A long slip on narrow slabs: SMALL's block (24 columns) on 80 substrate columns, driven at 0.05 c_r for
-# 20 l/c_r: it slides about 24 a, many times the skin, over slabs of 6-12 columns on 8 ranks.
+# 20 l/c_r: it slides about 24 a, many times the skin, over slabs of 4-9 columns on 8 ranks.
 LONG = {**SMALL, "lattice.bottom_cols": 80, "drive.v0": 0.05, "drive.duration": 20.0, "output.snapshots": 4,
         "output.buffer_frames": 16}
 LIMIT_S = 300
@@ -185,20 +185,21 @@ def long_slip(tmp_path_factory):
     return sc, d, datasets(out)[0]
 
 
-def _assert_same(got, ref, what):
-    names = [n for n in ref if n.startswith(("interface/", "energy/", "VTKHDF/"))]
+def _assert_same(got, ref, what, groups=("interface/", "energy/", "VTKHDF/")):
+    names = [n for n in ref if n.startswith(groups)]
     assert names and set(names) <= set(got), what
     for name in names:
         assert got[name].tobytes() == ref[name].tobytes(), (what, name)
 
 
 def test_eight_narrow_slabs_follow_a_long_slip_bitwise(long_slip):
-    """8 ranks: the halos are rebuilt many times as the block slides about 24 a over slabs of 6 to 12
-    columns, and every /interface, /energy and snapshot dataset is the one-rank run's, bit for bit."""
+    """8 ranks: the halos are rebuilt many times as the block slides about 24 a over slabs of 4 to 9 columns
+    (under the block; the outer two hold bare substrate), and every /interface, /energy and snapshot dataset
+    is the one-rank run's, bit for bit."""
     sc, d, ref = long_slip
     st = derive(scene(**LONG))
     lay = build_layout(st.lattice, 0, 8, st.reach)
-    assert max(np.diff(lay.bounds)) < 13 and st.v0 * st.n_drive * st.dt > 20
+    assert max(np.diff(lay.bounds)[1:-1]) < 10 and st.v0 * st.n_drive * st.dt > 20
     out = d / "r8.vtkhdf"
     p = run_cli(8, "run", sc, "--out", out, "--no-png", "--watchdog", "60", timeout=LIMIT_S)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -209,7 +210,8 @@ def test_eight_narrow_slabs_follow_a_long_slip_bitwise(long_slip):
 
 def test_a_checkpoint_of_a_slid_block_restarts_on_another_rank_count(long_slip):
     """Half the run on 8 ranks (the block slid 12 a: its slabs stand shifted), a checkpoint, the rest on 5:
-    the file is the one-rank run's, bit for bit."""
+    the interface record and the energy budget are the one-rank run's, bit for bit (the snapshots fall where
+    the first half's shorter duration put them)."""
     sc, d, ref = long_slip
     out = d / "r8_5.vtkhdf"
     p = run_cli(8, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=10.0",
@@ -218,7 +220,7 @@ def test_a_checkpoint_of_a_slid_block_restarts_on_another_rank_count(long_slip):
     p = run_cli(5, "run", sc, "--out", out, "--no-png", "--restart", f"{out}.ckpt.h5", "--watchdog", "60",
                 timeout=LIMIT_S)
     assert p.returncode == 0, p.stderr[-3000:]
-    _assert_same(datasets(out)[0], ref, "8 ranks, then 5")
+    _assert_same(datasets(out)[0], ref, "8 ranks, then 5", ("interface/", "energy/"))
 
 
 @pytest.mark.parametrize("case", range(12))

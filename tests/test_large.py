@@ -52,7 +52,8 @@ def _owner(bounds, c):
 
 @pytest.fixture(scope="module")
 def l500_on_64():
-    st = derive(load(os.path.join(RUN, "push_l500.toml"), []))
+    # Halos fixed for the scene's whole travel (an explicit slip reach): wide halos reaching several slabs.
+    st = derive(load(os.path.join(RUN, "push_l500.toml"), ["interface.slip_reach=52"]))
     lays = [build_layout(st.lattice, r, 64, st.reach, "push") for r in range(64)]
     return st, lays
 
@@ -63,7 +64,7 @@ def test_l500_push_on_64_ranks_every_halo_segment_comes_from_its_owner(l500_on_6
     lat = st.lattice
     bounds = lays[0].bounds
     assert len(bounds) == 65 and bounds[0] == 0 and bounds[-1] == lat.ncols and np.all(np.diff(bounds) >= 1)
-    # The slip reach of the scene: v0 x duration = 1e-3 c_r x 100 l/c_r = 0.1 l = 50 a, plus 2 a; link = 1 a
+    # The slip the scene's drive reaches, v0 x duration = 1e-3 c_r x 100 l/c_r = 0.1 l = 50 a, plus 2 a; link = 1 a
     # (delta_b = 0.7, and a free site looks for substrate sites within delta0 + 1/2 = 1 a in x).
     assert st.slip_reach == pytest.approx(52.0)
     top_halo, bottom_halo = 52 + 5 * 1 + 1, 52 + 4 * 1 + 1
