@@ -351,6 +351,53 @@ def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, sam
     return out
 
 
+# The design before the halos followed the slip, for the tables' "before" columns: halos fixed for the drive's
+# whole travel (plus 2 a), and the exchange packing a segment per row (2.6 ns per value, studies.bench.pack at
+# 754492d on this host; the fitted 26 ns of earlier pages held MPI's shared-memory copy as well).
+BEFORE_PACK_NS = 2.6
+
+
+def _before(setup):
+    """``setup`` as the code before the halos followed the slip laid it out: halos for the whole travel."""
+    from dataclasses import replace
+
+    from ...parallel.layout import interface_reach
+    travel = setup.drive.travel(setup.material.c_r, setup.t_unit) + 2.0
+    big = setup.law.largest(setup.lattice.n_top_sites if setup.lattice.has_interface else 0)
+    return replace(setup, reach=interface_reach(setup.law.rebond_length, big["delta_b"], travel))
+
+
+def scaling_rows(setup, ranks_list, coef: Coefficients, gather: bool = False) -> list[dict]:
+    """Strong scaling of one scene: each rank count's travel model now and as the code before laid it out
+    (fixed halos for the whole travel, segment-per-row packing), with the step on one rank for the speed-up."""
+    from dataclasses import replace as dc_replace
+    one = travel_model(setup, 1, coef, gather)["step_us_predicted"]
+    old = dc_replace(coef, pack_ns_per_value=BEFORE_PACK_NS)
+    rows = []
+    for p in ranks_list:
+        if p > setup.lattice.ncols:
+            continue
+        now = travel_model(setup, p, coef, gather)
+        before = travel_model(_before(setup), p, old, gather)
+        rows.append({"ranks": p, "nodes": setup.lattice.n_nodes, "now": now, "before": before,
+                     "speedup": one / now["step_us_predicted"],
+                     "parallel_efficiency": one / (p * now["step_us_predicted"])})
+    return rows
+
+
+def rows_markdown(rows) -> str:
+    """The strong-scaling rows as a table."""
+    out = ["| ranks | peers (before) | halo values/step (before) | us/step predicted (before) | compute us/step | "
+           "efficiency (before) | speed-up | T1/(P TP) |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        n, b = r["now"], r["before"]
+        out.append(f"| {r['ranks']} | {n['peers_max']} ({b['peers_max']}) | {n['halo_values_per_step']:,} "
+                   f"({b['halo_values_per_step']:,}) | {n['step_us_predicted']:,.1f} ({b['step_us_predicted']:,.1f}) | "
+                   f"{n['step_us_compute']:,.1f} | {n['efficiency_predicted']:.2f} ({b['efficiency_predicted']:.2f}) | "
+                   f"{r['speedup']:,.0f} | {r['parallel_efficiency']:.2f} |")
+    return "\n".join(out)
+
+
 def steps_to(setup, t_lcr: float) -> int:
     """Steps of a run of ``setup`` up to drive time ``t_lcr`` (l/c_r), its ramp and settle included."""
     return setup.n_ramp + setup.n_settle + int(math.ceil(t_lcr * setup.t_unit / setup.dt))
@@ -557,6 +604,12 @@ def main(argv=None) -> int:
     me.add_argument("--quiet", type=float, default=0.1,
                     help="wait for others to use at most this share of the cores, and redo a repeat during which "
                          "they used more (default 0.1; 0 or less: measure whatever the load)")
+    ta = sub.add_parser("tables", help="strong and weak scaling of the travel model, now and before, as markdown")
+    ta.add_argument("scene", help="scene file (the contact lengths are set by --l)")
+    ta.add_argument("--l", type=int, nargs="+", default=[10_000, 100_000])
+    ta.add_argument("--ranks", type=int, nargs="+", default=[1, 4, 16, 64, 256, 1024, 4096])
+    ta.add_argument("--weak", default="10000:256", metavar="L:RANKS",
+                    help="weak scaling at the per-rank share of l = L on RANKS ranks (default 10000:256)")
     fi = sub.add_parser("fit", help="fit the model to measured points and predict")
     fi.add_argument("json")
     fi.add_argument("--terms", default="N,H,1", help="comma-separated features of the model (N, S, H, M, 1)")
@@ -575,6 +628,9 @@ def main(argv=None) -> int:
         print(f"busiest rank: N = {f['N']}, S = {f['S']}, H = {f['H']} values/step, M = {f['M']} messages/step; "
               f"farthest peer {max(s.hops for s in shares)} slabs away")
         return 0
+    if a.cmd == "tables":
+        weak_l, weak_p = (int(v) for v in a.weak.split(":"))
+        return _tables(a.scene, a.l, a.ranks, (weak_l, weak_p))
     if a.cmd == "measure":
         measure(a.sizes, a.ranks, a.seconds, a.repeats, quiet=a.quiet if a.quiet > 0 else None, timeout=a.timeout,
                 path=a.json, log=lambda m: print(m, file=sys.stderr, flush=True))
@@ -584,6 +640,31 @@ def main(argv=None) -> int:
         pts = json.load(fh)
     return report(pts, tuple(a.terms.split(",")), a.exclude_ranks, a.predict, a.mode,
                   Cluster(a.throughput_ratio, a.latency_us, a.bandwidth_gbs))
+
+
+def _tables(scene: str, lengths, ranks, weak, out=print) -> int:
+    """Strong scaling at each contact length l (the scene's aspect ratio kept: substrate 3 l wide), and weak
+    scaling at the per-rank share of ``weak`` = (l, ranks): l grows with the rank count."""
+    from ...scene.derive import derive
+    from ...scene.load import load
+    coef = coefficients()
+    out(f"coefficients: {coef}")
+    for l in lengths:
+        st = derive(load(scene, [f"lattice.top_cols={l}", f"lattice.bottom_cols={3 * l}"]))
+        out(f"\n### Strong scaling, l = {l:,} ({st.lattice.n_nodes:,} nodes), {scene}\n")
+        out(rows_markdown(scaling_rows(st, ranks, coef)))
+    base_l, base_p = weak
+    out(f"\n### Weak scaling: l = {base_l:,} x P / {base_p:,} (the same nodes per rank), {scene}\n")
+    rows = []
+    for p in ranks:
+        l = max(int(round(base_l * p / base_p)), 100)
+        st = derive(load(scene, [f"lattice.top_cols={l}", f"lattice.bottom_cols={3 * l}"]))
+        r = scaling_rows(st, [p], coef)
+        if r:
+            r[0]["ranks"] = f"{p} (l = {l:,})"
+            rows += r
+    out(rows_markdown(rows))
+    return 0
 
 
 def report(pts, terms, exclude, targets, mode, cluster: Cluster, out=print) -> int:
