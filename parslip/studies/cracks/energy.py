@@ -4,11 +4,12 @@
 A row per front that has a steady stretch (``cracks.measurable``) in every run of the sweeps
 ``run/studies/cracks_energy*.toml``: its speed v over the stretch (c_r, and over the lattice's c_R), its band,
 route 1's G at the two contours (``G_contour_inner``, ``G_contour_outer``), route 2's (``G_field``), Gamma
-(m c_r^2 / a), G/Gamma by route 1 (the inner contour), the routes' ratio (route 1 over route 2), the contours'
-ratio, and what decides whether route 2 can be read: each block's height in process zones
-(``height_lambda``; ``cracks.field_resolved`` asks for ``cracks.FIELD_HEIGHT``).  Route 2 is computed on
-every front (``cracks.front_energy``) so that the runs on blocks too short for it show by how much it falls
-short; ``field_resolved`` says which rows the routes' comparison may use.
+(m c_r^2 / a), what the interface takes inside each contour by the events (``cracks.interface_take``: net of
+the re-formations, ``take_*``, and the breaks alone, ``breaks_*``), G/Gamma by route 1 (the inner contour), the
+routes' ratio (route 1 over route 2), the contours' ratio, and what decides whether route 2 can be read: each
+block's height in process zones (``height_lambda``; ``cracks.field_resolved`` asks for ``cracks.FIELD_HEIGHT``).
+Route 2 is computed on every front (``cracks.front_energy``) so that the runs on blocks too short for it show
+by how much it falls short; ``field_resolved`` says which rows the routes' comparison may use.
 """
 from __future__ import annotations
 
@@ -24,8 +25,9 @@ from parslip.studies.cracks import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "v0", "top_rows",
         "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner",
-        "G_contour_outer", "G_field", "Gamma", "take_inner", "take_outer", "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio",
-        "contours_ratio", "route1_ok", "field_resolved", "snapshots", "frames"]
+        "G_contour_outer", "G_field", "Gamma", "take_inner", "take_outer", "breaks_inner", "breaks_outer",
+        "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio", "contours_ratio", "route1_ok", "field_resolved",
+        "snapshots", "frames"]
 # What the page's table shows (the CSV holds every column).
 SHOWN = ["sweep", "point", "front", "damping", "zeta", "kx", "height_lambda", "v_over_cR", "Gamma", "G_over_Gamma",
          "G_field_over_Gamma", "G_routes_ratio", "contours_ratio"]
@@ -62,6 +64,7 @@ def front_row(sweep: str, row: dict, run, k: int, front) -> dict:
             "band": front.band or "-", "G_contour_inner": e["G_contour_inner"],
             "G_contour_outer": e["G_contour_outer"], "G_field": e["G_field"], "Gamma": e["Gamma"],
             "take_inner": e["take_inner"], "take_outer": e["take_outer"],
+            "breaks_inner": e["breaks_inner"], "breaks_outer": e["breaks_outer"],
             "G_over_Gamma": _ratio(e["G_contour_inner"], e["Gamma"]),
             "G_field_over_Gamma": _ratio(e["G_field"], e["Gamma"]),
             "G_routes_ratio": _ratio(e["G_contour_inner"], e["G_field"]),
