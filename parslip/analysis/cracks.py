@@ -15,7 +15,7 @@ route 2, ``field_g``        the dynamic mode II singular field fitted to the int
 (``palmer_rice_length``).  ``front_energy`` gives every scalar of one front at once.
 
 The per-front fields (``fronts.FIELDS``: ``parslip fronts --json``, ``front.<name>``), means over the front's
-steady stretch, null where the data is missing: ``G_contour_inner``, ``G_contour_outer`` (route 1, from
+steady stretch (route 1's weighted by the tip's local speed, ``route1_mean``), null where the data is missing: ``G_contour_inner``, ``G_contour_outer`` (route 1, from
 snapshots inside the stretch), ``G_field`` (route 2, from the interface frames), ``Gamma`` and
 ``Gamma_source``.  Each is computed on first use, the routes once per front; route 1 reads a snapshot only
 when its boxes fit in the lattice at the tip, so an ordinary run (sparse snapshots, a thin block) costs
@@ -579,7 +579,7 @@ def interface_take(run, front, radii: tuple = CONTOUR_RADII, net: bool = True) -
 
 def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_WINDOW) -> dict:
     """The per-front scalars, means over the front's steady stretch: G_contour_inner, G_contour_outer (route 1
-    at the two radii), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
+    at the two radii, ``route1_mean``), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
     snapshots and frames each mean holds (NaN where none); take_inner, take_outer (``interface_take``) and
     breaks_inner, breaks_outer (the same without the re-formations).  Route 1 is empty (NaN) for a run it
     cannot read (``route1_blocker``)."""
@@ -593,7 +593,8 @@ def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_W
         a = np.asarray(a, float)
         a = a[np.isfinite(a)]
         return float(a.mean()) if len(a) else math.nan
-    return {"G_contour_inner": mean([r["G"][0] for r in c]), "G_contour_outer": mean([r["G"][-1] for r in c]),
+    inner, outer = (math.nan if g is None else g for g in (route1_mean(c, 0), route1_mean(c, -1)))
+    return {"G_contour_inner": inner, "G_contour_outer": outer,
             "G_field": mean([r["G"] for r in f]), "Gamma": mean(g["Gamma"]), "Gamma_source": g["source"],
             "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f),
             "take_inner": take[0], "take_outer": take[-1], "breaks_inner": breaks[0], "breaks_outer": breaks[-1]}
@@ -625,6 +626,17 @@ def _memo(front, key: str, compute):
     return store[key]
 
 
+def route1_mean(rows: list[dict], k: int) -> float | None:
+    """Route 1's G over a stretch at radius ``k`` of its rows (``contour_g_run``): the energy per unit advance,
+    sum of G_i |V_i| over sum of |V_i| (each snapshot's power over the tip's local speed), None without a row.
+    For a steady front it is the mean of the G_i; for one that pauses, a snapshot in the pause (V near 0,
+    G_i the ratio of two small numbers) weighs as little as the tip advanced then."""
+    g = np.array([r["G"][k] for r in rows], float)
+    w = np.abs(np.array([r["V"] for r in rows], float))
+    ok = np.isfinite(g) & np.isfinite(w)
+    return float(np.sum(g[ok] * w[ok]) / np.sum(w[ok])) if ok.any() and np.sum(w[ok]) > 0 else None
+
+
 def _mean(values) -> float | None:
     """The mean of the finite values, None when there is none."""
     a = np.asarray(values, float)
@@ -640,8 +652,8 @@ def _contour_rows(run, front) -> list[dict]:
     return _memo(front, "contour", lambda: contour_g_run(run, front))
 
 
-ROUTE1_DOC = ("mean over the snapshots inside the front's steady stretch (the middle 60 % of its sites), with "
-              "the tip's local speed at each: null without such a snapshot (write them by a restart with a "
+ROUTE1_DOC = ("over the snapshots inside the front's steady stretch (the middle 60 % of its sites), with the "
+              "tip's local speed at each, weighted by it (energy per unit advance: route1_mean): null without such a snapshot (write them by a restart with a "
               "dense output.snapshots cadence: docs/guide/analysis.md, G and Gamma), where the box leaves the "
               "free lattice (a block thinner than the box), or for a run route 1 cannot read (rigid substrate, "
               "interface.reform_x0 other than zero, interface.contact > 0: route1_blocker)")
@@ -651,15 +663,15 @@ ROUTE1_DOC = ("mean over the snapshots inside the front's steady stretch (the mi
              f"square of half-side {CONTOUR_RADII[0]:g} Lambda about the tip per unit advance (Lambda the "
              "Palmer-Rice process zone), " + ROUTE1_DOC)
 def g_contour_inner(run, front) -> float | None:
-    """Route 1's G at the inner radius (``contour_g_run``), mean over the stretch's snapshots."""
-    return _mean([r["G"][0] for r in _contour_rows(run, front)])
+    """Route 1's G at the inner radius (``contour_g_run``) over the stretch's snapshots (``route1_mean``)."""
+    return route1_mean(_contour_rows(run, front), 0)
 
 
 @front_field("G_contour_outer", "m c_r^2/a", f"the same at {CONTOUR_RADII[-1]:g} Lambda: inner and outer agree "
              "where what the interface dissipates between them (re-formed bonds breaking again) is small")
 def g_contour_outer(run, front) -> float | None:
-    """Route 1's G at the outer radius (``contour_g_run``), mean over the stretch's snapshots."""
-    return _mean([r["G"][-1] for r in _contour_rows(run, front)])
+    """Route 1's G at the outer radius (``contour_g_run``) over the stretch's snapshots (``route1_mean``)."""
+    return route1_mean(_contour_rows(run, front), -1)
 
 
 @front_field("G_field", "m c_r^2/a", "G by route 2 (analysis.cracks): G = H(v) K_II^2 / 2 (H the Born "
