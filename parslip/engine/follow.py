@@ -50,7 +50,7 @@ def state_tables(sim) -> dict:
                                      "drive0": d0}),
             "slots": (NODES, s.driven_gid, {"force": s.drive.force.copy(), "work": b.work.T.copy(),
                                             "prev": b.prev.T.copy()}),
-            "sites": (SITES, site, {**bonds, "broken": b.broken[:, sl].T.copy(), "formed": b.formed[:, sl].T.copy()})}
+            "sites": (SITES, site, {**bonds, "budget": b.sites[:, :, sl].transpose(2, 0, 1).copy()})}
 
 
 def take_tables(sim, tables: dict):
@@ -71,8 +71,7 @@ def take_tables(sim, tables: dict):
     b.prev[:] = drive["prev"].T
     for name in BONDS.names:
         s.iface.bonds[BONDS.names.index(name), sl] = bonds[name]
-    b.broken[:, sl] = bonds["broken"].T
-    b.formed[:, sl] = bonds["formed"].T
+    b.sites[:, :, sl] = bonds["budget"].transpose(1, 2, 0)
 
 
 def _agreed_drift(sim):
