@@ -10,7 +10,6 @@ Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
 """
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -18,6 +17,7 @@ import numpy as np
 from ..errors import NonFiniteError, SlipReachError
 from ..model.interface import BONDS
 from ..model.lattice import TOP
+from ..parallel.exact_sum import exact_sums
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 # RUNAWAY_JUMP (a): a node that moves this far in one step is running away.  It lives with the scene
@@ -310,16 +310,6 @@ class Simulation:
         self._energy_restore(attrs)
 
     # ---------------------------------------------------------- energy budget --
-    def _pairs(self, parts) -> np.ndarray:
-        """Rank 0: [count, term] the correctly rounded sums (``math.fsum``) of every rank's pairs ``parts``
-        ([count, 2, term] each), so the same bits on any rank count (``kernels.budget``)."""
-        stack = np.stack(parts)                                   # [rank, count, 2, term]
-        count, terms = stack.shape[1], stack.shape[3]
-        return np.array([[math.fsum(stack[:, k, :, t].ravel()) for t in range(terms)] for k in range(count)])
-
-    def _to_root(self, x):
-        return [x] if self.comm is None else self.comm.gather(x, root=0)
-
     def budget_frames(self, count: int) -> dict | None:
         """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started:
         work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual (contract
@@ -328,10 +318,13 @@ class Simulation:
         (or from the checkpoint a run continues); without them (a checkpoint that predates the budget)
         they read NaN."""
         fr = self.frames
-        parts = self._to_root(fr.energy[:count])
-        if self.rank != 0:
+        # Each frame's terms as every rank's parts (a pair and the quanta's exact parts: [frame, part, term]),
+        # summed over parts and ranks exactly and rounded once (``parallel.exact_sum``): the correctly
+        # rounded sum, the same bits on any rank count (and those math.fsum of every part would give).
+        got = exact_sums(self.comm, [fr.energy[:count].transpose(0, 2, 1)], root=0)
+        if got is None:
             return None
-        tot = self._pairs(parts)
+        tot = got[0]                                              # [frame, term]
         if self.energy_base is None and fr.cursor[L.C_BASE] == 0 and fr.step[0] == self.setup.n_drive_start:
             self.energy_base = tot[0, [bg.KINETIC, bg.ELASTIC, bg.LOAD_Y]].copy()
         base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
@@ -364,18 +357,16 @@ class Simulation:
         # The kernels' exact sums: the damping's running total, and the kinetic and elastic energy of the
         # last step that ended on a frame (a frame not yet recorded when the run stopped reads them after).
         quanta = [int(b.acc[q, 0]) * (1 << bg.WORD) + int(b.acc[q, 1]) for q in range(bg.N_Q)]
-        parts = self._to_root((mine, quanta))
-        attrs = None
-        if self.rank == 0:
-            stack = np.stack([p[0] for p in parts])                # [rank, 2, term]
-            hi = np.array([math.fsum(stack[:, :, t].ravel()) for t in range(bg.N_TERMS)])
-            lo = np.array([math.fsum(list(stack[:, :, t].ravel()) + [-hi[t]]) for t in range(bg.N_TERMS)])
-            totals = [sum(p[1][q] for p in parts) for q in range(bg.N_Q)]      # exact, in quanta
-            base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
-            attrs = {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
-                     "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in totals],
-                                               np.int64)}
-        return attrs if self.comm is None else self.comm.bcast(attrs, root=0)
+        # Over the ranks: each term's pairs summed exactly, rounded once (hi) with what that left (lo), as
+        # math.fsum of every pair would give them; the quanta are integers, their sum is exact.
+        (hi, lo), = exact_sums(self.comm, [mine.T], remainder=True)
+        if self.comm is not None:
+            quanta = self.comm.allreduce(quanta, op=lambda a, c: [x + y for x, y in zip(a, c)])
+        base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+        if self.comm is not None:          # rank 0 holds the base (the drive's first frame, or a checkpoint's)
+            base = self.comm.bcast(base, root=0)
+        return {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
+                "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in quanta], np.int64)}
 
     def _energy_restore(self, attrs: dict):
         """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)."""

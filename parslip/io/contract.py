@@ -14,11 +14,13 @@ The writer (``io.output``) creates exactly these datasets and the readers
                                                f the interface bond's force on the top node (0 if broken);
                                                syy < 0 is compression
   /interface/friction_force  float64 [frames]  F_T, the sum over the interface bonds of their x-force on
-                                               the block (m c^2/a, F_N's unit), summed in global site order:
+                                               the block (m c^2/a, F_N's unit), correctly rounded (the
+                                               exact sum rounded once, so the same bits on any rank count
+                                               and in any order; older files summed in site order):
                                                < 0 while the interface holds the block back
   /interface/drive_force     float64 [frames]  the sum over the driven nodes of the x-force the drive
-                                               applied in the step that ended at the frame (m c^2/a): the
-                                               springs' force with drive.spring > 0
+                                               applied in the step that ended at the frame (m c^2/a),
+                                               correctly rounded: the springs' force with drive.spring > 0
   /interface/mu              float64 [frames]  -F_T / F_N, the friction coefficient the interface mobilises
   /interface/step            int64   [frames]  the drive step of the frame (steps of dt; 0 = the drive's start)
   /interface/loader          float64 [frames]  v0 t in l: where the loader is (drive.spring > 0: the rigid

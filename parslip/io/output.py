@@ -24,6 +24,7 @@ from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
+from ..parallel.exact_sum import exact_sums
 from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS,
                        PER_FRAME_1D, SITE_DATASETS, STATUS, TIMING_PREFIX, put_status, status_value)
 from .scenefile import to_toml
@@ -544,31 +545,16 @@ class Output:
         return total
 
     def forces(self, fx, fdrive) -> dict:
-        """Rank 0: the per-frame sums over the whole interface and every driven node, in global order, so
-        they are the same bits on any rank count (each rank's values travel to rank 0, which sums them):
-        friction_force = sum of the bonds' x-forces on the block, drive_force = sum of the drive's
-        x-forces, mu = -friction_force / F_N."""
-        if self.size > 1:
-            parts = self.comm.gather((self.site0, fx, self.driven_gid, fdrive), root=0)
-        else:
-            parts = [(self.site0, fx, self.driven_gid, fdrive)]
-        if not self.root:
+        """Rank 0: the per-frame sums over the whole interface and every driven node, correctly rounded
+        (``parallel.exact_sum``: each rank's share summed exactly, the shares merged exactly through a
+        reduction tree, rounded once), so the same bits on any rank count, whatever the order of the
+        terms; collective.  friction_force = sum of the bonds' x-forces on the block, drive_force = sum of
+        the drive's x-forces, mu = -friction_force / F_N.  {} on the other ranks."""
+        got = exact_sums(self.comm if self.size > 1 else None, [fx, np.asarray(fdrive, np.float64)], root=0)
+        if got is None:
             return {}
-        count = fx.shape[0]
-        if len(parts) == 1:                      # one rank: its arrays are already whole and in order
-            fx_all, fd_all = fx, np.asarray(fdrive, np.float64)
-        else:
-            fx_all = np.zeros((count, self.n_sites))
-            gids, fd = [], []
-            for s0, f, g, d in parts:
-                fx_all[:, s0:s0 + f.shape[1]] = f
-                gids.append(g)
-                fd.append(d)
-            gids = np.concatenate(gids) if gids else np.zeros(0, np.int64)
-            fd_all = np.concatenate(fd, axis=1) if fd else np.zeros((count, 0))
-            fd_all = np.ascontiguousarray(fd_all[:, np.argsort(gids, kind="stable")], dtype=np.float64)
-        friction, drive = _ordered_sum(fx_all), _ordered_sum(fd_all)
-        mu = -friction / self.fn if self.fn > 0 else np.full(count, np.nan)
+        friction, drive = got
+        mu = -friction / self.fn if self.fn > 0 else np.full(len(friction), np.nan)
         return {"friction_force": friction, "drive_force": drive, "mu": mu}
 
     def snapshot(self, k, t, pos, vel, sig, partner):
@@ -689,14 +675,3 @@ def _hdf5_error_line(e: BaseException) -> str:
     if m:
         return f"{e.__class__.__name__}: {head} ({m.group(1)})"
     return f"{e.__class__.__name__}: {' '.join(text.split())}"
-
-
-def _ordered_sum(values: np.ndarray) -> np.ndarray:
-    """Each row's sum in index order, one addition at a time, ((v0 + v1) + v2) + ...: the documented order,
-    not NumPy's pairwise sum; vectorised over the rows (frames), site by site."""
-    if values.shape[1] == 0:
-        return np.zeros(values.shape[0])
-    total = values[:, 0].copy()
-    for j in range(1, values.shape[1]):
-        total += values[:, j]
-    return total
