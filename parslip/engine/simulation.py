@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import NonFiniteError, SlipReachError
 from ..model.interface import BONDS
 from ..model.lattice import TOP
+from ..model.physics import ROW_HEIGHT
 from ..parallel.exact_sum import exact_sums
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
@@ -407,7 +408,30 @@ class Simulation:
         st = self.setup
         t = st.to_lcr((self.n - st.n_drive_start) * st.dt)
         pos, vel, sig = self.state.node_fields(self.n)
-        writer.snapshot(j, t, pos, vel, sig, self.state.owned_partner())
+        partner = self.state.owned_partner()
+        writer.snapshot(j, t, pos, vel, sig, partner, self._far_ends(pos, partner))
+
+    def _far_ends(self, pos: np.ndarray, partner: np.ndarray) -> np.ndarray:
+        """(sites, 3) where the far end of each OWNED site's interface cell stands at step n (a): its bond's
+        substrate node (read from this rank's arrays, which hold every node a bond of its sites reaches,
+        HALO copies included), or its own top node while broken or bonded to a rigid substrate.  The same
+        sum as ``State.node_fields``'s reference + u, so the same bits as that node's own point."""
+        s, lat = self.state, self.setup.lattice
+        if not lat.has_interface:
+            return np.zeros((0, 3))
+        top = (s.own_block == TOP) & (s.own_row == 0)                 # the sites' nodes, in site order
+        out = pos[top].copy()
+        bonded = np.flatnonzero(partner >= 0) if not lat.rigid else np.zeros(0, np.int64)
+        if len(bonded):
+            bx, by, _, _ = s.level(self.n)
+            g = s.iface.geom
+            col = partner[bonded]
+            row = lat.bottom.rows - 1
+            ux = bx[g.brow, col - g.bbase].astype(np.float64)
+            uy = by[g.brow, col - g.bbase].astype(np.float64)
+            out[bonded, 0] = (col + lat.bottom.offset(row)) + ux
+            out[bonded, 1] = (lat.bottom.y0 + row * ROW_HEIGHT) + uy
+        return out
 
     # --------------------------------------------------------------- errors --
     def _gather(self, x):
