@@ -7,9 +7,10 @@ Both serve the writer (``io.output``), so that no rank holds what every rank hol
   (step, rank, local order) is (step, site, kind)).  Each rank learns where its records go from
   histograms over steps, an exclusive scan over the ranks and an allreduce, in windows of at most
   WINDOW steps: memory and messages of O(WINDOW) per rank, none of them growing with the rank count.
-- ``stream_to_root``: rank 0 takes its own piece, then asks each other rank in turn for its piece and
-  takes it before asking the next, so it never holds more than its own and one other rank's piece
-  (a rank that sent unasked could pile messages up at rank 0: MPI buffers small ones on arrival).
+- ``stream_to_root``: rank 0 takes its own pieces, then asks each other rank in turn for its pieces, a
+  message of at most a fixed number of bytes at a time, and takes them before asking again, so it never
+  holds more than its own pieces and one message (a rank that sent unasked could pile messages up at
+  rank 0: MPI buffers small ones on arrival).
 """
 from __future__ import annotations
 
@@ -58,17 +59,34 @@ def place_by_step(comm, steps: np.ndarray) -> tuple[np.ndarray, int]:
     return pos, base
 
 
-def stream_to_root(comm, piece, take) -> None:
-    """``take(piece)`` on rank 0 for its own piece, then for every other rank's, in rank order, each sent
-    only when rank 0 asks for it.  Collective; ``comm`` None: ``take(piece)`` here."""
+def stream_to_root(comm, items: list, take, weight, cap: int) -> None:
+    """``take(item)`` on rank 0 for each of its own ``items``, then for every other rank's, in rank order,
+    each rank's sent in messages of at most ``cap`` bytes (``weight(item)``: an item's bytes; an item
+    heavier than ``cap`` travels alone), each message only when rank 0 asks for it: rank 0 holds its own
+    items and one message.  Collective; ``comm`` None: ``take`` here."""
+    if comm is None or comm.Get_size() == 1 or comm.Get_rank() == 0:
+        for item in items:
+            take(item)
     if comm is None or comm.Get_size() == 1:
-        take(piece)
         return
     if comm.Get_rank() == 0:
-        take(piece)
         for r in range(1, comm.Get_size()):
-            comm.send(None, dest=r, tag=TAG)           # your turn
-            take(comm.recv(source=r, tag=TAG))
-    else:
+            more = True
+            while more:
+                comm.send(None, dest=r, tag=TAG)       # your turn
+                batch, more = comm.recv(source=r, tag=TAG)
+                for item in batch:
+                    take(item)
+                del batch
+        return
+    batches, batch, load = [], [], 0
+    for item in items:
+        if batch and load + weight(item) > cap:
+            batches.append(batch)
+            batch, load = [], 0
+        batch.append(item)
+        load += weight(item)
+    batches.append(batch)
+    for i, batch in enumerate(batches):
         comm.recv(source=0, tag=TAG)
-        comm.send(piece, dest=0, tag=TAG)
+        comm.send((batch, i + 1 < len(batches)), dest=0, tag=TAG)
