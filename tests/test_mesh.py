@@ -1,6 +1,6 @@
 """The snapshots' two layouts (``parslip.io.mesh``) read back alike, in every reader.
 
-tests/data/snapshots_cc50ac0: a push run to 3 l/c_r written by the code at cc50ac0, whose snapshots store
+tests/data/snapshots_25429d0: a push run to 3 l/c_r written by the code at 25429d0, whose snapshots store
 every step's bonds with the step (the per-step layout), with its last checkpoint.  Today's code continues
 it to 6 l/c_r on 2 ranks (appending its later snapshots in the file's own layout) and runs the same scene
 from the start, writing the shared mesh (the bonds stored once, a far end per interface site).  At every
@@ -22,7 +22,7 @@ from parslip.io.contract import read_snapshot_arrays
 from parslip.io.xdmf import sidecar_path, write_xdmf
 from test_xdmf import needs_pvpython, pvpython_read
 
-DATA = Path(__file__).parent / "data" / "snapshots_cc50ac0"
+DATA = Path(__file__).parent / "data" / "snapshots_25429d0"
 SITES = 24
 POINT_FIELDS = ("velocity", "sxx", "syy", "sxy")
 CELL_FIELDS = ("interface", "intact")
@@ -50,7 +50,7 @@ def layouts(tmp_path_factory):
     assert p.returncode == 0, p.stderr
     t_old, t_new = (parslip.open(str(f)).snapshot_times for f in (old, new))
     both = [(int(np.flatnonzero(t_old == t)[0]), k) for k, t in enumerate(t_new) if t in t_old]
-    # 0 and 2 l/c_r written by the code at cc50ac0, 4 and 6 appended by today's in the per-step layout.
+    # 0 and 2 l/c_r written by the code at 25429d0, 4 and 6 appended by today's in the per-step layout.
     assert len(t_old) == 6 and len(both) == 4 and t_old[3] == pytest.approx(3.0, abs=0.01)
     return old, new, both
 
