@@ -270,18 +270,19 @@ class Output:
 
     def _write_pieces(self, pieces: list):
         """Write this rank's pieces [(dataset, rows, values)]: rows a tuple of slices (a block), an increasing
-        int array (points of a 1-D dataset) or None (nothing from this rank).  Collective.
+        int array (points of a 1-D dataset) or None (nothing from this rank); a dataset's pieces listed
+        together, in increasing order.  Collective.
 
-        mpio: each piece is one collective write, so every rank lists the same datasets in the same order;
-        a rank whose earlier write failed still takes part, with nothing.  gather: rank 0 writes its own
-        pieces, then each other rank's in turn (``parallel.pieces.stream_to_root``)."""
+        mpio: one collective write per dataset (its pieces one selection), so every rank lists the same
+        datasets in the same order; a rank whose earlier write failed still takes part, with nothing.
+        gather: rank 0 writes its own pieces, then each other rank's in turn, in messages of at most
+        STREAM_BYTES (``parallel.pieces.stream_to_root``)."""
         if self.mode == "mpio":
-            for name, rows, values in pieces:
-                ds = self._ds(name)
+            for name, group in _by_dataset(pieces):
                 if self._error is not None:
-                    rows = None
+                    group = []
                 try:
-                    _h5_write(ds, rows, values, self._dxpl)
+                    _h5_write(self._ds(name), group, self._dxpl)
                 except (OSError, RuntimeError) as e:
                     if self._error is None:
                         self._error = (name, _hdf5_error_line(e))
@@ -289,10 +290,17 @@ class Output:
 
         def take(piece):
             name, rows, values = piece
-            self._write(name, lambda: _h5_write(self._ds(name), rows, values))
+            self._write(name, lambda: _h5_write(self._ds(name), [(rows, values)]))
         mine = [q for p in pieces if p[1] is not None for q in _split(*p, STREAM_BYTES)]
         stream_to_root(self.comm if self.size > 1 else None, mine, take, lambda p: np.asarray(p[2]).nbytes,
                        STREAM_BYTES)
+
+    def _write_root(self, pieces: list):
+        """Rank 0 writes pieces only it holds (the per-frame series, the snapshots' times): independently under
+        mpio (no other rank has a part), directly in gather mode.  Not collective."""
+        if self.root:
+            for name, rows, values in pieces:
+                self._write(name, lambda: _h5_write(self._ds(name), [(rows, values)]))
 
     def _agree_write(self, flag: bool = False) -> bool:
         """Collective: raise ``WriteError`` on every rank if a write failed on any; else return ``flag`` as
@@ -486,22 +494,18 @@ class Output:
         sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
         self._test_hooks(k0 + count)
         sums = self.forces(frames.fx[:count], frames.fdrive[:count])
-        pieces = [(f"interface/{name}", sl, getattr(frames, name)[:count]) for name in FRAME_FIELDS]
-        # The per-frame values come from rank 0 (the others take part in the collective writes with none).
-        rows = (slice(k0, k0 + count),) if self.root else None
-        per_frame = dict(sums)
-        if self.root:
+        self._agree_write()            # no rank enters the collective writes after a failure of its own
+        self._write_pieces([(f"interface/{name}", sl, getattr(frames, name)[:count]) for name in FRAME_FIELDS])
+        if self.root:                  # the per-frame series: rank 0 alone holds them
             st = self.spec.setup
             steps = frames.step[:count] - st.n_drive_start
-            per_frame.update(time=times, step=steps,
+            per_frame = dict(sums, time=times, step=steps,
                              loader=steps * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count))
-        pieces += [(f"interface/{name}", rows, per_frame.get(name)) for name in ("time", "step", "loader")
-                   + FORCE_DATASETS]
-        if self._has_energy:
-            pieces += [(f"{ENERGY}/{name}", rows if energy is not None else None,
-                        None if energy is None else energy[name]) for name in ENERGY_DATASETS]
-        self._agree_write()            # no rank enters the collective writes after a failure of its own
-        self._write_pieces(pieces)
+            rows = (slice(k0, k0 + count),)
+            pieces = [(f"interface/{name}", rows, values) for name, values in per_frame.items()]
+            if energy is not None and self._has_energy:
+                pieces += [(f"{ENERGY}/{name}", rows, values) for name, values in energy.items()]
+            self._write_root(pieces)
         # Rank 0's clock decides whether to flush, and every rank learns it from the agreement below, since
         # under mpio the flush is collective.
         due = self.rank == 0 and time.monotonic() - self._flushed >= FLUSH_S
@@ -695,31 +699,48 @@ def _split(name, rows, values, cap: int):
             for i in range(0, len(values), step)]
 
 
-def _h5_write(ds, rows, values, dxpl=None):
-    """Write ``values`` to ``rows`` of dataset ``ds`` through HDF5 directly (h5py's slicing skips an empty
-    selection, which would leave a collective write short of a rank): ``rows`` a tuple of slices (a block
-    of the leading axes, whole along the others), an increasing int array (elements of a 1-D dataset), or
-    None (nothing: this rank's part of a collective write)."""
+def _by_dataset(pieces: list):
+    """[(dataset, [(rows, values), ...])]: consecutive pieces of one dataset together, rows None left out."""
+    out = []
+    for name, rows, values in pieces:
+        if not out or out[-1][0] != name:
+            out.append((name, []))
+        if rows is not None:
+            out[-1][1].append((rows, values))
+    return out
+
+
+def _h5_write(ds, parts: list, dxpl=None):
+    """Write ``parts`` [(rows, values)] of dataset ``ds`` as one selection, through HDF5 directly (h5py's
+    slicing skips an empty selection, which would leave a collective write short of a rank): rows a tuple
+    of slices (a block of the leading axes, whole along the others) or an increasing int array (elements
+    of a 1-D dataset), the parts in increasing order in the file; no parts: nothing (this rank's part of a
+    collective write)."""
     space = ds.id.get_space()
-    shape = None
-    if isinstance(rows, np.ndarray):
-        if len(rows):
-            space.select_elements(np.asarray(rows, np.uint64).reshape(-1, 1))
-            shape = (len(rows),)
-    elif rows is not None:
+    space.select_none()
+    chunks = []
+    points = [rows for rows, _ in parts if isinstance(rows, np.ndarray) and len(rows)]
+    if points:
+        space.select_elements(np.concatenate(points).astype(np.uint64).reshape(-1, 1))
+    for rows, values in parts:
+        if isinstance(rows, np.ndarray):
+            if len(rows):
+                chunks.append(np.reshape(values, (len(rows),)))
+            continue
         start = tuple(r.start for r in rows) + (0,) * (len(ds.shape) - len(rows))
         count = tuple(r.stop - r.start for r in rows) + tuple(ds.shape[len(rows):])
         if all(count):
-            space.select_hyperslab(start, count)
-            shape = count
-    if shape is None:
-        space.select_none()
+            space.select_hyperslab(start, count, op=h5s.SELECT_OR)
+            chunks.append(np.reshape(values, count))
+    if not chunks:
         memory = h5s.create_simple((1,))
         memory.select_none()
         data = np.zeros(1, ds.dtype)
     else:
-        memory = h5s.create_simple(shape)
-        data = np.ascontiguousarray(np.reshape(values, shape), ds.dtype)
+        # The file selection runs in increasing order, and so do the parts: their values one after another.
+        data = np.ascontiguousarray(chunks[0] if len(chunks) == 1 else
+                                    np.concatenate([c.reshape(-1) for c in chunks]), ds.dtype)
+        memory = h5s.create_simple(data.shape if len(chunks) == 1 else (data.size,))
     ds.id.write(memory, space, data, dxpl=dxpl)
 
 
