@@ -56,11 +56,12 @@ def test_vtkhdf_opens_in_pyvista(result):
     assert r.reader.GetNumberOfSteps() == 3
     with h5py.File(result, "r") as f:
         n_nodes = f.attrs["n_nodes"]
-        last_pts = f["VTKHDF/Points"][2 * n_nodes:]
+        n_points = n_nodes + 24                 # the nodes, and a far end per interface site (io.mesh)
+        last_pts = f["VTKHDF/Points"][2 * n_points:3 * n_points]
         intact_last = f["interface/intact"][-1]
     r.reader.SetStep(2)
     mesh = r.read()
-    assert mesh.n_points == n_nodes
+    assert mesh.n_points == n_points
     np.testing.assert_array_equal(np.asarray(mesh.points), last_pts)
     for name in ("velocity", "sxx", "syy", "sxy"):
         assert name in mesh.point_data
@@ -72,6 +73,12 @@ def test_vtkhdf_opens_in_pyvista(result):
     bulk = lines[~iface]
     length = np.linalg.norm(mesh.points[bulk[:, 0]] - mesh.points[bulk[:, 1]], axis=1)
     assert abs(np.median(length) - 1.0) < 0.01 and length.min() > 0.8 and length.max() < 1.2
+    # An interface bond joins its top node to the far end standing where its substrate node is: about
+    # delta0 = 0.5 a long while intact, a point while broken.
+    top, far = lines[iface, 0], lines[iface, 1]
+    assert (top < n_nodes).all() and np.array_equal(far, n_nodes + np.arange(24))
+    gap = np.linalg.norm(mesh.points[top] - mesh.points[far], axis=1)
+    assert (gap[intact_last == 0] == 0).all() and np.all(np.abs(gap[intact_last == 1] - 0.5) < 0.3)
     # Under F_N the top block is compressed: sigma_yy < 0 on average in the top rows.
     assert np.mean(mesh.point_data["syy"][np.asarray(mesh.points)[:, 1] > 4]) < 0
 

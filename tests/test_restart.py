@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from helpers import assert_extension_is_the_run, datasets, reference_run, run_cli
-from parslip.io.contract import read_status
+from parslip.io.contract import read_snapshot_arrays, read_status
 
 # SMALL with a checkpoint every 1 l/c_r (about 300 steps).
 CKPT = {"checkpoint.every": 1.0, "output.snapshots": 4}
@@ -140,7 +140,7 @@ def test_checkpoint_holds_the_state_by_global_id(tmp_path, uninterrupted):
         k = int(g.attrs["frames_written"]) - 1
         l = float(f.attrs["l"])
         # The block's interface nodes: global ids of row 0 of the top block, column by column.
-        pts = f["VTKHDF/Points"][-int(f.attrs["n_nodes"]):]
+        pts = read_snapshot_arrays(str(out), int(f["VTKHDF/Steps"].attrs["NSteps"]) - 1)["points"]
         y0 = pts[:, 1].reshape(-1)
         top_row = np.isclose(y0 - u[:, 1], (4 - 1) * np.sqrt(3) / 2 + 0.5)
         np.testing.assert_array_equal(u[top_row, 0] * (1.0 / l), g["ux"][k])     # frames store u x (1/l)
@@ -176,6 +176,7 @@ def test_a_checkpoint_written_by_an_earlier_version_still_restarts(tmp_path):
         assert all(saved[key] == value for key, value in IMPLIED.items())
         f.attrs["scene"] = to_toml({k: v for k, v in saved.items() if k not in IMPLIED})
         old = int(f.attrs["events_written"])
+        frames_old = int(f.attrs["frames_written"])
     with h5py.File(out, "r+") as f:                     # events recorded before they had an energy and a traction
         for name in ADDED_EVENT_FIELDS:
             del f["interface/events"][name]
@@ -198,5 +199,12 @@ def test_a_checkpoint_written_by_an_earlier_version_still_restarts(tmp_path):
         if name.split("/")[-1] in ADDED_EVENT_FIELDS and name.startswith("interface/events/"):
             assert np.isnan(got[name][:old]).all(), name          # not known: NaN, never a made-up value
             assert got[name][old:].tobytes() == want[name][old:].tobytes(), name
+            continue
+        if name in ("interface/friction_force", "interface/drive_force", "interface/mu"):
+            # The old version summed these in site order, today's rounds the exact sum once: its own frames
+            # differ in the last bits (the terms cancel: up to 1e-12 of the sum), the continuation's are today's.
+            k = frames_old
+            np.testing.assert_allclose(got[name][:k], want[name][:k], rtol=1e-10, err_msg=name)
+            assert got[name][k:].tobytes() == want[name][k:].tobytes(), name
             continue
         assert got[name].tobytes() == want[name].tobytes(), name

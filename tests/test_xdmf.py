@@ -29,18 +29,22 @@ VTK_LINE, VTK_POLY_LINE = 3, 4
 
 
 def expected(path):
-    """Per snapshot, straight from the flat /VTKHDF datasets: times, points, bonds, fields."""
+    """Per snapshot, straight from the flat /VTKHDF datasets at the offsets /VTKHDF/Steps gives (either
+    layout, io.mesh): times, points, bonds, fields.  Returns (times, points per step, cells per step, steps)."""
     with h5py.File(path, "r") as f:
         v = f["VTKHDF"]
-        t = v["Steps/Values"][...]
-        N, M = int(v["NumberOfPoints"][0]), int(v["NumberOfCells"][0])
+        s = v["Steps"]
+        t = s["Values"][...]
         steps = []
         for k in range(len(t)):
+            part = int(s["PartOffsets"][k])
+            N, M = int(v["NumberOfPoints"][part]), int(v["NumberOfCells"][part])
+            p0, q0 = int(s["PointOffsets"][k]), int(s["ConnectivityIdOffsets"][k])
             steps.append({
-                "points": v["Points"][k * N:(k + 1) * N],
-                "bonds": v["Connectivity"][2 * k * M:2 * (k + 1) * M].reshape(M, 2),
-                **{n: v[f"PointData/{n}"][k * N:(k + 1) * N] for n in POINT_FIELDS},
-                **{n: v[f"CellData/{n}"][k * M:(k + 1) * M] for n in CELL_FIELDS},
+                "points": v["Points"][p0:p0 + N],
+                "bonds": v["Connectivity"][q0:q0 + 2 * M].reshape(M, 2),
+                **{n: v[f"PointData/{n}"][int(s[f"PointDataOffsets/{n}"][k]):][:N] for n in POINT_FIELDS},
+                **{n: v[f"CellData/{n}"][int(s[f"CellDataOffsets/{n}"][k]):][:M] for n in CELL_FIELDS},
             })
     return t, N, M, steps
 

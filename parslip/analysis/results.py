@@ -27,6 +27,8 @@ import numpy as np
 from ..errors import ConfigError
 from ..io import contract
 
+VTK_LINE = 3                    # VTK's cell type of a two-node line
+
 
 class Run:
     """One run file, read lazily and cached; nothing here writes to it.
@@ -39,7 +41,6 @@ class Run:
     def __init__(self, path: str):
         contract.check_run_file(path)
         self.path = str(path)
-        self._reader = None
 
     @classmethod
     def from_arrays(cls, interface: dict, scene: dict | None = None, attrs: dict | None = None) -> "Run":
@@ -48,7 +49,7 @@ class Run:
         ``scene`` holds dotted keys (``{"load.FN": 1.0}``), ``attrs`` the root attributes (``c_s``, ``c_l``,
         ``c_r`` give the block's wave speeds to a record without events)."""
         self = cls.__new__(cls)
-        self.path, self._reader = "<memory>", None
+        self.path = "<memory>"
         iface = dict(interface)
         iface.setdefault("t", iface.get("time"))
         iface.setdefault("time", iface["t"])
@@ -147,29 +148,33 @@ class Run:
     def snapshot(self, k: int):
         """Snapshot ``k`` (negative counts from the end) as a pyvista UnstructuredGrid.
 
-        Point fields: velocity (internal unit), sxx, syy, sxy (rho c_r^2); line
-        cells with cell fields ``interface`` and ``intact``; positions in a.
+        Point fields: velocity (internal unit), sxx, syy, sxy (rho c_r^2), one point per node in global
+        id order; line cells (every bond: the bulk bonds, then one per interface site, from its top node
+        to the substrate node it is bonded to, the top node twice while broken) with cell fields
+        ``interface`` and ``intact``; positions in a; field ``Time`` (l/c_r).  Read through the contract
+        (``io.contract.read_snapshot_arrays``), so the same mesh from either snapshot layout (``io.mesh``).
         """
         n = len(self.snapshot_times)
         if not -n <= k < n:
             raise ConfigError(f"snapshot {k}: out of range; accepted: -{n} <= k < {n} "
                               f"({n} snapshots in {self.path})" if n else
                               f"snapshot {k}: {self.path} holds no snapshots; accepted: a run with output.snapshots > 0")
-        r = self._pv_reader()
-        r.reader.SetStep(k % n)
-        return r.read()
+        from ..errors import optional
+        pv = optional("pyvista", "reading a snapshot as a mesh")
+        a = contract.read_snapshot_arrays(self.path, k % n)
+        cells = a["cells"]
+        lines = np.hstack([np.full((len(cells), 1), 2, np.int64), cells]).ravel()
+        mesh = pv.UnstructuredGrid(lines, np.full(len(cells), VTK_LINE, np.uint8), np.asarray(a["points"]))
+        for name in ("velocity", "sxx", "syy", "sxy"):
+            mesh.point_data[name] = a[name]
+        for name in ("interface", "intact"):
+            mesh.cell_data[name] = a[name]
+        mesh.field_data["Time"] = np.array([a["time"]])
+        return mesh
 
     def snapshot_at(self, t: float):
         """The snapshot nearest time ``t`` (l/c_r) as a pyvista mesh."""
         return self.snapshot(_nearest(self.snapshot_times, t, "snapshot time"))
-
-    def _pv_reader(self):
-        if self._reader is None:
-            from ..errors import optional
-            pv = optional("pyvista", "reading a snapshot as a mesh")
-            self._reader = pv.get_reader(self.path, force_ext=".vtkhdf")
-            self._reader.reader.UpdateInformation()
-        return self._reader
 
     # --- fronts -------------------------------------------------------------
     def fronts(self, **kw):

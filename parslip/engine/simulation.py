@@ -10,7 +10,6 @@ Time is internal (a/c_ref) inside; every time the user sees is in l/c_r.
 """
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -19,6 +18,8 @@ from ..errors import NonFiniteError, SlipReachError
 from ..io.contract import ENERGY_SINKS, ENERGY_SOURCES
 from ..model.interface import BONDS
 from ..model.lattice import TOP
+from ..model.physics import ROW_HEIGHT
+from ..parallel.exact_sum import exact_sums
 from ..parallel.exchange import build_plan, release
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
 from ..parallel.migrate import NODES, SITES, Placement, block_columns, redistribute
@@ -359,16 +360,6 @@ class Simulation:
             mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
 
     # ---------------------------------------------------------- energy budget --
-    def _pairs(self, parts) -> np.ndarray:
-        """Rank 0: [count, term] the correctly rounded sums (``math.fsum``) of every rank's pairs ``parts``
-        ([count, 2, term] each), so the same bits on any rank count (``kernels.budget``)."""
-        stack = np.stack(parts)                                   # [rank, count, 2, term]
-        count, terms = stack.shape[1], stack.shape[3]
-        return np.array([[math.fsum(stack[:, k, :, t].ravel()) for t in range(terms)] for k in range(count)])
-
-    def _to_root(self, x):
-        return [x] if self.comm is None else self.comm.gather(x, root=0)
-
     def budget_frames(self, count: int) -> dict | None:
         """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started: the
         sources (contract ``ENERGY_SOURCES``: work_drive, work_normal, formed, contact_switched) equal the
@@ -378,10 +369,13 @@ class Simulation:
         (or from the checkpoint a run continues); without them (a checkpoint that predates the budget)
         they read NaN."""
         fr = self.frames
-        parts = self._to_root(fr.energy[:count])
-        if self.rank != 0:
+        # Each frame's terms as every rank's parts (a pair and the quanta's exact parts: [frame, part, term]),
+        # summed over parts and ranks exactly and rounded once (``parallel.exact_sum``): the correctly
+        # rounded sum, the same bits on any rank count (and those math.fsum of every part would give).
+        got = exact_sums(self.comm, [fr.energy[:count].transpose(0, 2, 1)], root=0)
+        if got is None:
             return None
-        tot = self._pairs(parts)
+        tot = got[0]                                              # [frame, term]
         if self.energy_base is None and fr.cursor[L.C_BASE] == 0 and fr.step[0] == self.setup.n_drive_start:
             self.energy_base = tot[0, list(bg.STATE)].copy()
         base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
@@ -416,18 +410,16 @@ class Simulation:
         # The kernels' exact sums: the damping's running total, and the kinetic and elastic energy of the
         # last step that ended on a frame (a frame not yet recorded when the run stopped reads them after).
         quanta = [int(b.acc[q, 0]) * (1 << bg.WORD) + int(b.acc[q, 1]) for q in range(bg.N_Q)]
-        parts = self._to_root((mine, quanta))
-        attrs = None
-        if self.rank == 0:
-            stack = np.stack([p[0] for p in parts])                # [rank, 2, term]
-            hi = np.array([math.fsum(stack[:, :, t].ravel()) for t in range(bg.N_TERMS)])
-            lo = np.array([math.fsum(list(stack[:, :, t].ravel()) + [-hi[t]]) for t in range(bg.N_TERMS)])
-            totals = [sum(p[1][q] for p in parts) for q in range(bg.N_Q)]      # exact, in quanta
-            base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
-            attrs = {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
-                     "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in totals],
-                                               np.int64)}
-        return attrs if self.comm is None else self.comm.bcast(attrs, root=0)
+        # Over the ranks: each term's pairs summed exactly, rounded once (hi) with what that left (lo), as
+        # math.fsum of every pair would give them; the quanta are integers, their sum is exact.
+        (hi, lo), = exact_sums(self.comm, [mine.T], remainder=True)
+        if self.comm is not None:
+            quanta = self.comm.allreduce(quanta, op=lambda a, c: [x + y for x, y in zip(a, c)])
+        base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
+        if self.comm is not None:          # rank 0 holds the base (the drive's first frame, or a checkpoint's)
+            base = self.comm.bcast(base, root=0)
+        return {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
+                "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in quanta], np.int64)}
 
     def _energy_restore(self, attrs: dict):
         """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)."""
@@ -478,6 +470,7 @@ class Simulation:
         t = st.to_lcr((self.n - st.n_drive_start) * st.dt)
         pos, vel, sig = self.state.node_fields(self.n)
         partner = self.state.owned_partner()
+        far = self._far_ends(pos, partner)                # read where the state is, before any move
         here = follow.placement(self.layout)
         if self.size > 1 and not (np.array_equal(here.bounds, self.io_placement.bounds) and
                                   tuple(here.offsets) == tuple(self.io_placement.offsets)):
@@ -486,10 +479,32 @@ class Simulation:
             site = np.arange(len(partner), dtype=np.int64) + (s.site0() if self.setup.lattice.has_interface else 0)
             got = redistribute(self.comm, self.setup.lattice, here, self.io_placement,
                                {"nodes": (NODES, s.gid, {"pos": pos, "vel": vel, "sig": sig}),
-                                "sites": (SITES, site, {"partner": partner})})
-            cols, partner = got["nodes"][2], got["sites"][2]["partner"]
-            pos, vel, sig = cols["pos"], cols["vel"], cols["sig"]
-        writer.snapshot(j, t, pos, vel, sig, partner)
+                                "sites": (SITES, site, {"partner": partner, "far": far})})
+            cols, sites = got["nodes"][2], got["sites"][2]
+            pos, vel, sig, partner, far = cols["pos"], cols["vel"], cols["sig"], sites["partner"], sites["far"]
+        writer.snapshot(j, t, pos, vel, sig, partner, far)
+
+    def _far_ends(self, pos: np.ndarray, partner: np.ndarray) -> np.ndarray:
+        """(sites, 3) where the far end of each OWNED site's interface cell stands at step n (a): its bond's
+        substrate node (read from this rank's arrays, which hold every node a bond of its sites reaches,
+        HALO copies included), or its own top node while broken or bonded to a rigid substrate.  The same
+        sum as ``State.node_fields``'s reference + u, so the same bits as that node's own point."""
+        s, lat = self.state, self.setup.lattice
+        if not lat.has_interface:
+            return np.zeros((0, 3))
+        top = (s.own_block == TOP) & (s.own_row == 0)                 # the sites' nodes, in site order
+        out = pos[top].copy()
+        bonded = np.flatnonzero(partner >= 0) if not lat.rigid else np.zeros(0, np.int64)
+        if len(bonded):
+            bx, by, _, _ = s.level(self.n)
+            g = s.iface.geom
+            col = partner[bonded]
+            row = lat.bottom.rows - 1
+            ux = bx[g.brow, col - g.bbase].astype(np.float64)
+            uy = by[g.brow, col - g.bbase].astype(np.float64)
+            out[bonded, 0] = (col + lat.bottom.offset(row)) + ux
+            out[bonded, 1] = (lat.bottom.y0 + row * ROW_HEIGHT) + uy
+        return out
 
     # --------------------------------------------------------------- errors --
     def _gather(self, x):

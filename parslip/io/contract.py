@@ -14,11 +14,13 @@ The writer (``io.output``) creates exactly these datasets and the readers
                                                f the interface bond's force on the top node (0 if broken);
                                                syy < 0 is compression
   /interface/friction_force  float64 [frames]  F_T, the sum over the interface bonds of their x-force on
-                                               the block (m c^2/a, F_N's unit), summed in global site order:
+                                               the block (m c^2/a, F_N's unit), correctly rounded (the
+                                               exact sum rounded once, so the same bits on any rank count
+                                               and in any order; older files summed in site order):
                                                < 0 while the interface holds the block back
   /interface/drive_force     float64 [frames]  the sum over the driven nodes of the x-force the drive
-                                               applied in the step that ended at the frame (m c^2/a): the
-                                               springs' force with drive.spring > 0
+                                               applied in the step that ended at the frame (m c^2/a),
+                                               correctly rounded: the springs' force with drive.spring > 0
   /interface/mu              float64 [frames]  -F_T / F_N, the friction coefficient the interface mobilises
   /interface/step            int64   [frames]  the drive step of the frame (steps of dt; 0 = the drive's start)
   /interface/loader          float64 [frames]  v0 t in l: where the loader is (drive.spring > 0: the rigid
@@ -39,7 +41,21 @@ The writer (``io.output``) creates exactly these datasets and the readers
       traction float64  its shear traction k_x (x_ij - x0)/a then (rho c_r^2), as the frames' sxy
     attributes: events_written (how many are valid), site_column0 (the substrate column facing site 0:
     at the start every site s is bonded to column site_column0 + s)
-  /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots
+  /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots (the
+                                               layouts: ``io.mesh``): every node (points in a, velocity
+                                               in internal units, sxx, syy, sxy in rho c_r^2) and every bond
+                                               as a line cell (the bulk bonds in global order, then one per
+                                               interface site), cell fields interface and intact.  The
+                                               bonds are stored once for all the snapshots; each snapshot
+                                               has N + sites points: the N nodes in global id order, then
+                                               one per site at the far end of its interface cell (its
+                                               bond's substrate node, or its top node while broken or on a
+                                               rigid substrate) with its top node's fields
+  /snapshots/far_node int64 [snapshots * sites] the global node id at the far end of each interface cell,
+                                               per snapshot (``read_snapshot_arrays`` turns the cells back
+                                               into node ids).  Files written before it have no /snapshots
+                                               and store every snapshot's bonds with it, as node ids (N
+                                               points per snapshot); the readers here read both
   /status             string (4096 bytes)      "running", "complete", "checkpointed at step N", "interrupted
                                                at step N" or "failed: REASON" (``STATUS``, ``read_status``)
   root attributes                              resolved scene (TOML), provenance, derived constants, and the
@@ -222,6 +238,8 @@ def replay_events(events: dict, n_sites: int, frame_steps: np.ndarray) -> tuple[
 # is missing, not HDF5 or not a parslip run gives one ConfigError line (exit 2).
 
 VTKHDF = "VTKHDF"
+SNAPSHOTS = "snapshots"         # /snapshots: what the shared mesh layout keeps beside /VTKHDF
+FAR_NODE = "far_node"
 
 
 def check_run_file(path: str, what: str = "RUN") -> None:
@@ -330,11 +348,12 @@ def read_timings(path: str) -> dict:
 
 
 def read_snapshot_arrays(path: str, k: int) -> dict:
-    """Snapshot ``k`` of a run file as plain arrays, without pyvista: ``points`` (N, 3) positions in a and
-    ``velocity`` (N, 3) half-step velocities (internal units), both in global node id order; ``cells`` (M, 2)
-    the line cells' node ids (every bulk bond, then one cell per interface site: its top node and the substrate
-    node it is bonded to, the top node twice while broken) and ``interface`` (M,) 1 on the interface cells;
-    ``time`` in l/c_r."""
+    """Snapshot ``k`` of a run file as plain arrays, without pyvista, whichever layout the file has:
+    ``points`` (N, 3) positions in a, ``velocity`` (N, 3) half-step velocities (internal units) and ``sxx``,
+    ``syy``, ``sxy`` (N,) stresses (rho c_r^2), all in global node id order; ``cells`` (M, 2) the line cells'
+    node ids (every bulk bond, then one cell per interface site: its top node and the substrate node it is
+    bonded to, the top node twice while broken), ``interface`` (M,) 1 on the interface cells, ``intact``
+    (M,) 1 on the intact ones; ``time`` in l/c_r."""
     import h5py
 
     with h5py.File(path, "r") as f:
@@ -343,9 +362,22 @@ def read_snapshot_arrays(path: str, k: int) -> dict:
         if not 0 <= k < S:
             from ..errors import ConfigError
             raise ConfigError(f"snapshot {k}: out of range; accepted: 0 <= k < {S} ({path})")
-        p0, c0 = int(g["Steps/PointOffsets"][k]), int(g["Steps/CellOffsets"][k])
-        n, m = int(g["NumberOfPoints"][k]), int(g["NumberOfCells"][k])
-        q0 = int(g["Steps/ConnectivityIdOffsets"][k])
-        return {"points": g["Points"][p0:p0 + n], "velocity": g["PointData/velocity"][p0:p0 + n],
-                "cells": g["Connectivity"][q0:q0 + 2 * m].reshape(m, 2),
-                "interface": g["CellData/interface"][c0:c0 + m], "time": float(g["Steps/Values"][k])}
+        steps = g["Steps"]
+        part = int(steps["PartOffsets"][k])
+        m = int(g["NumberOfCells"][part])
+        n = int(f.attrs["n_nodes"]) if "n_nodes" in f.attrs else int(g["NumberOfPoints"][part])
+        q0 = int(steps["ConnectivityIdOffsets"][k])
+        cells = g["Connectivity"][q0:q0 + 2 * m].reshape(m, 2)
+        out = {"cells": cells, "time": float(steps["Values"][k])}
+        for group, names, rows in (("PointData", ("velocity", "sxx", "syy", "sxy"), n),
+                                   ("CellData", ("interface", "intact"), m)):
+            for name in names:
+                a = int(steps[f"{group}Offsets/{name}"][k])
+                out[name] = g[f"{group}/{name}"][a:a + rows]
+        p0 = int(steps["PointOffsets"][k])
+        out["points"] = g["Points"][p0:p0 + n]
+        if SNAPSHOTS in f:              # the shared mesh: interface cells end at far-end points N + s
+            iface = np.flatnonzero(out["interface"] == 1)
+            ns = len(iface)
+            cells[iface, 1] = f[SNAPSHOTS][FAR_NODE][k * ns:(k + 1) * ns]
+        return out

@@ -1,13 +1,22 @@
 """The one HDF5 file a run writes: the interface record, snapshots, provenance.
 
 Responsible for writing the output contract of ``io.contract`` (read its
-docstring for the datasets and their units).
+docstring for the datasets and their units; ``io.mesh`` for where the
+snapshots go).
 
 Sites are ordered by x.  Every dataset has a fixed size known at the start,
-and each rank's share of it is one contiguous slice (global ids run column
-by column).  With an MPI-enabled h5py, every rank writes its own slices
-through the ``mpio`` driver; otherwise rank 0 gathers the slices and writes
-the same layout.  Either way the file is identical for any rank count.
+and each rank's share of it is one contiguous block (global ids run column
+by column), or two (a snapshot's nodes and its sites' far ends).  With an
+MPI-enabled h5py every rank writes its own blocks through the ``mpio``
+driver, each dataset in one collective write (HDF5 then merges the ranks'
+blocks into large contiguous file accesses); otherwise rank 0 writes its own
+blocks, then asks every other rank for its blocks in turn and writes them
+(``parallel.pieces.stream_to_root``), so it never holds more than its own
+and one other rank's share.  The sums over every rank (friction and drive
+forces, the energy budget) are exact reductions (``parallel.exact_sum``),
+and the bond events are placed in their global order by histograms over
+steps (``parallel.pieces.place_by_step``): no rank gathers the others'
+values.  Either way the file is identical for any rank count.
 """
 from __future__ import annotations
 
@@ -19,16 +28,20 @@ from dataclasses import dataclass
 
 import h5py
 import numpy as np
+from h5py import h5fd, h5p, h5s
 
 from .. import hooks
 from ..version import __version__
 from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
-from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FRAME_FIELDS, INTERFACE_DATASETS,
-                       PER_FRAME_1D, SITE_DATASETS, STATUS, TIMING_PREFIX, put_status, status_value)
+from ..parallel.exact_sum import exact_sums
+from ..parallel.pieces import place_by_step, stream_to_root
+from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FAR_NODE, FORCE_DATASETS, FRAME_FIELDS,
+                       INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, SNAPSHOTS, STATUS, TIMING_PREFIX, VTKHDF,
+                       put_status, status_value)
+from .mesh import PER_STEP, SHARED, Mesh, Share, per_step_cells, snapshot_pieces, static_pieces
 from .scenefile import to_toml
 
-VTK_LINE = 3
 # Chunks.  A write that covers whole chunks goes straight to the file; one that covers part of a chunk
 # goes through HDF5's chunk cache (1 MiB per dataset), or, for a chunk larger than the cache, reads the chunk
 # back first.  So: an interface dataset's chunk holds one frame buffer's worth of frames (the blocks the
@@ -36,6 +49,9 @@ VTK_LINE = 3
 # (measured on 100 sites: 1.7 against 2.9 us per frame with 655-frame chunks; a 1,000-node snapshot's
 # Points written into 65,536-row chunks read 1.5 MB back each time).
 CHUNK_BYTES = 1 << 20
+# The gathering writer's messages to rank 0: at most this many bytes each (``parallel.pieces.stream_to_root``),
+# so rank 0 holds its own share and one message, whatever the rank count or another rank's share.
+STREAM_BYTES = 1 << 20
 EVENT_CHUNK = 1 << 14            # events per chunk of /interface/events/* (grown at each flush that has some)
 MAX_FRAME_CHUNK_BYTES = 4 << 20
 # The file is flushed (metadata and all) at least this often while frames are written (s), at each
@@ -136,19 +152,15 @@ class Output:
         self.root = self.rank == 0
         self.f = self._open(path, comm, "r+" if resume else "w")
 
-        # My slices of the global arrays: OWNED nodes are a contiguous range of global ids.
+        # My slices of the global arrays: OWNED nodes are a contiguous range of global ids, and so are my
+        # columns' bulk bonds in the global order of bonds.
         self.node0, self.site0 = spec.node0, spec.site0
         self.frame_site0 = spec.frame_site0
         c0, c1 = spec.col_range
-        self.bulk_cells = _bulk_cells(lat, c0, c1)
-        # The bulk cells' constant fields (not interface, intact), written with each snapshot.
-        self._bulk_zeros = np.zeros(len(self.bulk_cells), np.uint8)
-        self._bulk_ones = np.ones(len(self.bulk_cells), np.uint8)
-        counts = self._allgather(len(self.bulk_cells))
-        self.cell0 = int(sum(counts[:self.rank]))
-        self.n_bulk_cells = int(sum(counts))
+        bulk = _bulk_cells(lat, c0, c1)
+        nb = len(bulk)
+        self.cell0 = self._exscan(nb)
         self.n_nodes, self.n_sites = lat.n_nodes, lat.n_top_sites
-        self.n_cells = self.n_bulk_cells + self.n_sites
         lo, hi = spec.owned_sites
         self.top_gid = lat.gid(TOP, 0, np.arange(lo, hi)).astype(np.int64)
         self.driven_gid = spec.driven_gid
@@ -156,17 +168,31 @@ class Output:
         # A bond to a rigid substrate has no substrate node: drawn, like a broken bond, as a point-line.
         self.bottom_gid_of_site = ((lambda q: np.full(np.shape(q), -1, np.int64)) if lat.rigid else
                                    (lambda q: lat.gid(BOTTOM, lat.bottom.rows - 1, q)))
+        self._dxpl = None
+        if self.mode == "mpio":            # every dataset write collective (``_write_pieces``)
+            self._dxpl = h5p.create(h5p.DATASET_XFER)
+            self._dxpl.set_dxpl_mpio(h5fd.MPIO_COLLECTIVE)
         self._catch_unraisable()
         self._old_snapshots = 0            # snapshot slots the file held before a restart grew it
+        snapshots = bool(self.spec.snapshots_total) and st.scene["output.fields"] != "interface"
+        # A restart goes on in the layout its file has (``io.mesh``); a new file shares its mesh.
+        layout = self._file_layout() if resume and snapshots else SHARED
+        self.mesh = Mesh(lat.n_nodes, lat.n_top_sites, self._allreduce(nb), layout)
+        self.share = Share(node0=self.node0, n_nodes=int(lat.col_start[c1] - lat.col_start[c0]), cell0=self.cell0,
+                           n_bulk=nb, site0=self.site0, top_gid=self.top_gid, last=self.rank == self.size - 1)
+        # The per-step layout writes its bonds with every snapshot; the shared one once, below.
+        self.bulk_cells = bulk if layout == PER_STEP else None
         if resume:
             self._resume(st, resume)
         else:
             self._write("(creating the datasets)", lambda: self._create(st, provenance or {}))
-        if self.spec.snapshots_total and st.scene["output.fields"] != "interface":
-            old = self._old_snapshots if self.size == 1 or self.mode == "mpio" else \
-                self.comm.bcast(self._old_snapshots, root=0)
-            self._cell_constants(old, self.spec.snapshots_total)
+        # A file from before the energy budget has no /energy (under mpio every rank sees the same file).
+        self._has_energy = self.f is not None and ENERGY in self.f
         try:
+            if snapshots and not resume:
+                self._agree_write()        # before the collective writes of the stored mesh
+                self._write_pieces(static_pieces(self.mesh, self.share, bulk))
+            del bulk
             self.flush()
         except WriteError:
             self.close(status=f"failed: cannot write {path}")
@@ -211,8 +237,23 @@ class Output:
                 f.close()
             raise ConfigError(err)
 
-    def _allgather(self, x):
-        return [x] if self.comm is None or self.size == 1 else self.comm.allgather(x)
+    def _exscan(self, n: int) -> int:
+        """The sum of ``n`` over the ranks below this one (a scan, no gather)."""
+        if self.comm is None or self.size == 1:
+            return 0
+        below = self.comm.exscan(int(n))
+        return int(below) if self.rank else 0
+
+    def _allreduce(self, n: int) -> int:
+        return int(n) if self.comm is None or self.size == 1 else int(self.comm.allreduce(int(n)))
+
+    def _file_layout(self) -> str:
+        """The snapshot layout of the file being continued: rank 0 reads it (in gather mode it alone holds
+        the file), every rank learns it."""
+        layout = None
+        if self.f is not None:
+            layout = SHARED if SNAPSHOTS in self.f or VTKHDF not in self.f else PER_STEP
+        return layout if self.size == 1 or self.mode == "mpio" else self.comm.bcast(layout, root=0)
 
     def _ds(self, name):
         """Dataset ``name``, looked up once: a snapshot writes a dozen of them, and h5py's path lookup
@@ -232,19 +273,39 @@ class Output:
         except (OSError, RuntimeError) as e:
             self._error = (what, _hdf5_error_line(e))
 
-    def _put(self, name, index, data):
-        """Write my slice ``index`` (a tuple of slices) of dataset ``name``."""
+    def _write_pieces(self, pieces: list):
+        """Write this rank's pieces [(dataset, rows, values)]: rows a tuple of slices (a block), an increasing
+        int array (points of a 1-D dataset) or None (nothing from this rank); a dataset's pieces listed
+        together, in increasing order.  Collective.
+
+        mpio: one collective write per dataset (its pieces one selection), so every rank lists the same
+        datasets in the same order; a rank whose earlier write failed still takes part, with nothing.
+        gather: rank 0 writes its own pieces, then each other rank's in turn, in messages of at most
+        STREAM_BYTES (``parallel.pieces.stream_to_root``)."""
         if self.mode == "mpio":
-            self._write(name, lambda: self._ds(name).__setitem__(index, data))
+            for name, group in _by_dataset(pieces):
+                if self._error is not None:
+                    group = []
+                try:
+                    _h5_write(self._ds(name), group, self._dxpl)
+                except (OSError, RuntimeError) as e:
+                    if self._error is None:
+                        self._error = (name, _hdf5_error_line(e))
             return
-        parts = [(index, data)] if self.size == 1 else self.comm.gather((index, data), root=0)
+
+        def take(piece):
+            name, rows, values = piece
+            self._write(name, lambda: _h5_write(self._ds(name), [(rows, values)]))
+        mine = [q for p in pieces if p[1] is not None for q in _split(*p, STREAM_BYTES)]
+        stream_to_root(self.comm if self.size > 1 else None, mine, take, lambda p: np.asarray(p[2]).nbytes,
+                       STREAM_BYTES)
+
+    def _write_root(self, pieces: list):
+        """Rank 0 writes pieces only it holds (the per-frame series, the snapshots' times): independently under
+        mpio (no other rank has a part), directly in gather mode.  Not collective."""
         if self.root:
-            def put():
-                ds = self._ds(name)
-                for idx, d in parts:
-                    if np.size(d):
-                        ds[idx] = d
-            self._write(name, put)
+            for name, rows, values in pieces:
+                self._write(name, lambda: _h5_write(self._ds(name), [(rows, values)]))
 
     def _agree_write(self, flag: bool = False) -> bool:
         """Collective: raise ``WriteError`` on every rank if a write failed on any; else return ``flag`` as
@@ -336,19 +397,28 @@ class Output:
             self._handles[f"interface/{EVENTS}/{name}"] = ds
         if self.spec.snapshots_total == 0 or st.scene["output.fields"] == "interface":
             return          # no snapshots asked for: no empty VTKHDF group either
-        v = self._handles["VTKHDF"] = f.create_group("VTKHDF")
+        self._create_snapshots(self.spec.snapshots_total)
+
+    def _create_snapshots(self, S: int):
+        """The /VTKHDF group and /snapshots for S snapshots (``io.mesh``), the steps' offsets written."""
+        v = self._handles[VTKHDF] = self.f.create_group(VTKHDF)
         v.attrs["Version"] = np.array([2, 2], np.int64)
         v.attrs["Type"] = np.bytes_(b"UnstructuredGrid")
-        S = self.spec.snapshots_total
-        for name, shape in self._vtk_shapes(S).items():
-            dt_ = np.uint8 if name in ("Types", "CellData/interface", "CellData/intact") else (
-                np.float64 if name.startswith(("Points", "PointData")) or name == "Steps/Values" else np.int64)
-            if name == "Steps/Values":
+        far = self.f.create_group(SNAPSHOTS)
+        far.attrs["units"] = "global node ids"
+        for path, shape in self.mesh.shapes(S).items():
+            if path == f"{VTKHDF}/Steps/Values":
                 shape = (0,)              # grows with each snapshot: VTK's reader needs len(Values) == NSteps
-            self._handles[f"VTKHDF/{name}"] = v.create_dataset(
-                name, shape=shape, maxshape=(None,) + shape[1:], dtype=dt_,
-                chunks=(self._chunk_rows(name, shape),) + shape[1:], dcpl=_early())
-        self._ds("VTKHDF/Steps").attrs["NSteps"] = np.int64(0)
+            self._handles[path] = self.f.create_dataset(
+                path, shape=shape, maxshape=(None,) + shape[1:], dtype=self.mesh.dtype(path),
+                chunks=(self._chunk_rows(path, shape),) + shape[1:], dcpl=_early())
+        self._handles[f"{SNAPSHOTS}/{FAR_NODE}"].attrs["meaning"] = (
+            "per snapshot and interface site: the global id of the node at the far end of the site's interface "
+            "cell (its bond's substrate node; its top node while broken or on a rigid substrate)")
+        self._ds(f"{VTKHDF}/Steps").attrs["NSteps"] = np.int64(0)
+        if self.root:
+            for path, values in self.mesh.counts().items():
+                self._ds(path)[:] = values
         self._step_constants(0, S)
 
     def _create_energy(self, nf: int, rows: int):
@@ -363,67 +433,25 @@ class Output:
             self._handles[f"{ENERGY}/{name}"] = ds
 
     def _step_constants(self, k0: int, k1: int):
-        """Per-step constants of snapshots k0..k1-1 (one part, N points, M line cells, offsets into the flat
-        arrays), written at once when the file is made or grows: a snapshot then writes its data only."""
+        """Per-step constants of snapshots k0..k1-1 (the ``Steps`` offsets; in the per-step layout also each
+        step's part counts, cell offsets and types, one step at a time), written by rank 0 when the file is
+        made or grows: a snapshot then writes its data only."""
         if not self.root or k1 <= k0:
             return
-        N, M = self.n_nodes, self.n_cells
         k = np.arange(k0, k1, dtype=np.int64)
-        for name, val in (("NumberOfPoints", np.full(len(k), N)), ("NumberOfCells", np.full(len(k), M)),
-                          ("NumberOfConnectivityIds", np.full(len(k), 2 * M)), ("Steps/PartOffsets", k),
-                          ("Steps/NumberOfParts", np.ones(len(k), np.int64)), ("Steps/PointOffsets", k * N),
-                          ("Steps/CellOffsets", k * M), ("Steps/ConnectivityIdOffsets", k * 2 * M)):
-            self._ds(f"VTKHDF/{name}")[k0:k1] = val
-        for name in ("velocity", "sxx", "syy", "sxy"):
-            self._ds(f"VTKHDF/Steps/PointDataOffsets/{name}")[k0:k1] = k * N
-        for name in ("interface", "intact"):
-            self._ds(f"VTKHDF/Steps/CellDataOffsets/{name}")[k0:k1] = k * M
-        # Every step's cells are lines: offsets into its connectivity, and their type (one step at a time,
-        # so no array of all the steps' cells is ever held).
-        offsets, types = 2 * np.arange(M + 1, dtype=np.int64), np.full(M, VTK_LINE, np.uint8)
-        for j in range(k0, k1):
-            self._ds("VTKHDF/Offsets")[j * (M + 1):(j + 1) * (M + 1)] = offsets
-            self._ds("VTKHDF/Types")[j * M:(j + 1) * M] = types
+        for path, values in self.mesh.step_values(k).items():
+            self._ds(path)[k0:k1] = values
+        if self.mesh.layout == PER_STEP:
+            for j in range(k0, k1):
+                for path, rows, values in per_step_cells(self.mesh, j):
+                    self._ds(path)[rows] = values
 
-    def _cell_constants(self, k0: int, k1: int):
-        """The cells of snapshots k0..k1-1 that never change, written when the file is made or grows
-        (collective): each rank's bulk bonds (connectivity, interface 0, intact 1) and its interface cells'
-        flag (interface 1).  A snapshot then writes only its fields and the interface bonds' state."""
-        M = self.n_cells
-        nb, ns = len(self.bulk_cells), len(self.top_gid)
-        ones = np.ones(ns, np.uint8)
-        for k in range(k0, k1):
-            c0 = k * M + self.cell0
-            self._put("VTKHDF/Connectivity", (slice(2 * c0, 2 * (c0 + nb)),), self.bulk_cells.ravel())
-            self._put("VTKHDF/CellData/interface", (slice(c0, c0 + nb),), self._bulk_zeros)
-            self._put("VTKHDF/CellData/intact", (slice(c0, c0 + nb),), self._bulk_ones)
-            i0 = k * M + self.n_bulk_cells + self.site0
-            self._put("VTKHDF/CellData/interface", (slice(i0, i0 + ns),), ones)
-
-    def _chunk_rows(self, name: str, shape: tuple) -> int:
-        """Rows of a VTKHDF dataset's chunk: one snapshot's rows (N points, M cells, M + 1 offsets, 2 M
-        connectivity ids, 1 per-step value), at most CHUNK_BYTES, at most the dataset."""
-        N, M = self.n_nodes, self.n_cells
-        per = (N if name.startswith(("Points", "PointData")) else 2 * M if name == "Connectivity" else
-               M + 1 if name == "Offsets" else M if name in ("Types",) or name.startswith("CellData") else 64)
+    def _chunk_rows(self, path: str, shape: tuple) -> int:
+        """Rows of a snapshot dataset's chunk: one snapshot's rows (``Mesh.rows_per_chunk``), at most
+        CHUNK_BYTES, at most the dataset."""
         width = int(np.prod(shape[1:])) * 8
+        per = self.mesh.rows_per_chunk(path)
         return int(max(1, min(per, max(1, CHUNK_BYTES // width), max(shape[0], 1))))
-
-    def _vtk_shapes(self, S: int) -> dict:
-        """Shapes of the VTKHDF datasets for S snapshots (N points, M line cells each)."""
-        N, M = self.n_nodes, self.n_cells
-        shapes = {"NumberOfPoints": (S,), "NumberOfCells": (S,), "NumberOfConnectivityIds": (S,),
-                  "Points": (S * N, 3), "Types": (S * M,), "Offsets": (S * (M + 1),), "Connectivity": (S * 2 * M,),
-                  "PointData/velocity": (S * N, 3), "CellData/interface": (S * M,), "CellData/intact": (S * M,),
-                  "Steps/Values": (S,), "Steps/PartOffsets": (S,), "Steps/NumberOfParts": (S,),
-                  "Steps/PointOffsets": (S,), "Steps/CellOffsets": (S,), "Steps/ConnectivityIdOffsets": (S,)}
-        for name in ("sxx", "syy", "sxy"):
-            shapes[f"PointData/{name}"] = (S * N,)
-        for name in ("velocity", "sxx", "syy", "sxy"):
-            shapes[f"Steps/PointDataOffsets/{name}"] = (S,)
-        for name in ("interface", "intact"):
-            shapes[f"Steps/CellDataOffsets/{name}"] = (S,)
-        return shapes
 
     def _resume(self, st, run_id: str):
         """A restart: the file must be this run's; its datasets grow to what the rest of the run writes."""
@@ -456,11 +484,11 @@ class Output:
                                                  maxshape=(None,), chunks=(EVENT_CHUNK,)).attrs["units"] = unit
                     g[EVENTS][name].resize(self.spec.events_written, axis=0)
                 g[EVENTS].attrs["events_written"] = self.spec.events_written
-            if "VTKHDF" in f:
-                old = self._old_snapshots = f["VTKHDF/NumberOfPoints"].shape[0]
-                for name, shape in self._vtk_shapes(self.spec.snapshots_total).items():
-                    if name != "Steps/Values":
-                        f["VTKHDF"][name].resize(shape[0], axis=0)
+            if VTKHDF in f:
+                old = self._old_snapshots = f[f"{VTKHDF}/Steps/PointOffsets"].shape[0]
+                for path, shape in self.mesh.shapes(self.spec.snapshots_total).items():
+                    if self.mesh.grows(path) and path != f"{VTKHDF}/Steps/Values":
+                        f[path].resize(shape[0], axis=0)
                 self._step_constants(old, self.spec.snapshots_total)
             put_status(f, "running")
             self._status_at = f[STATUS].id.get_offset()
@@ -475,24 +503,19 @@ class Output:
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.frame_site0, self.frame_site0 + ns))
         self._test_hooks(k0 + count)
-        for name in FRAME_FIELDS:
-            self._put(f"interface/{name}", sl, getattr(frames, name)[:count])
         sums = self.forces(frames.fx[:count], frames.fdrive[:count])
-        if self.root:
+        self._agree_write()            # no rank enters the collective writes after a failure of its own
+        self._write_pieces([(f"interface/{name}", sl, getattr(frames, name)[:count]) for name in FRAME_FIELDS])
+        if self.root:                  # the per-frame series: rank 0 alone holds them
             st = self.spec.setup
             steps = frames.step[:count] - st.n_drive_start
-            loader = steps * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count)
-
-            def put():
-                self._ds("interface/time")[k0:k0 + count] = times
-                self._ds("interface/step")[k0:k0 + count] = steps
-                self._ds("interface/loader")[k0:k0 + count] = loader
-                for name, values in sums.items():
-                    self._ds(f"interface/{name}")[k0:k0 + count] = values
-                if energy is not None and ENERGY in self.f:
-                    for name, values in energy.items():
-                        self._ds(f"{ENERGY}/{name}")[k0:k0 + count] = values
-            self._write("interface/time", put)
+            per_frame = dict(sums, time=times, step=steps,
+                             loader=steps * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count))
+            rows = (slice(k0, k0 + count),)
+            pieces = [(f"interface/{name}", rows, values) for name, values in per_frame.items()]
+            if energy is not None and self._has_energy:
+                pieces += [(f"{ENERGY}/{name}", rows, values) for name, values in energy.items()]
+            self._write_root(pieces)
         # Rank 0's clock decides whether to flush, and every rank learns it from the agreement below, since
         # under mpio the flush is collective.
         due = self.rank == 0 and time.monotonic() - self._flushed >= FLUSH_S
@@ -523,62 +546,46 @@ class Output:
         """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``, the
         bonds' stored ``energies`` and shear ``tractions``) at index ``k0`` of /interface/events, in the
         contract's order: by step, then site, then kind.  Collective, also for a rank with none;
-        ``time_of(steps)`` gives their times (l/c_r).  Returns the events in the file, the same on every rank."""
-        mine = (np.asarray(steps, np.int64), np.asarray(sites, np.int32), np.asarray(kinds, np.uint8),
-                np.asarray(partners, np.int32), np.asarray(energies, np.float64), np.asarray(tractions, np.float64))
-        parts = [mine] if self.size == 1 else self.comm.gather(mine, root=0)
-        total = None
-        if self.root:
-            step, site, kind, partner, energy, traction = (np.concatenate(col) for col in zip(*parts))
-            order = np.lexsort((kind, site, step))
-            data = {"step": step[order], "site": site[order], "kind": kind[order], "partner": partner[order],
-                    "energy": energy[order], "traction": traction[order]}
-            data["time"] = np.asarray(time_of(data["step"]), np.float64)
-            total = k0 + len(order)
-        if self.size > 1:
-            total = self.comm.bcast(total, root=0)
-        if total == k0:
+        ``time_of(steps)`` gives their times (l/c_r).  Returns the events in the file, the same on every rank.
+
+        Sites are dealt to the ranks in increasing order, so the order is by step, then rank, then each
+        rank's own (site, kind) order: each rank sorts its own events and learns where they go from
+        histograms over steps (``parallel.pieces.place_by_step``); no rank holds another's events, but rank
+        0 of the gathering writer, one rank's at a time."""
+        mine = {"step": np.asarray(steps, np.int64), "site": np.asarray(sites, np.int32),
+                "kind": np.asarray(kinds, np.uint8), "partner": np.asarray(partners, np.int32),
+                "energy": np.asarray(energies, np.float64), "traction": np.asarray(tractions, np.float64)}
+        order = np.lexsort((mine["kind"], mine["site"], mine["step"]))
+        data = {name: values[order] for name, values in mine.items()}
+        data["time"] = np.asarray(time_of(data["step"]), np.float64)
+        where, count = place_by_step(self.comm if self.size > 1 else None, data["step"])
+        total = k0 + count
+        if count == 0:
             return total
         self._agree_write()            # before the collective resize below
         if self.f is not None:
             def grow():
-                g = self._ds(f"interface/{EVENTS}")
                 for name in EVENT_DATASETS:
                     self._ds(f"interface/{EVENTS}/{name}").resize((total,))
-                if self.root:
-                    for name in EVENT_DATASETS:
-                        self._ds(f"interface/{EVENTS}/{name}")[k0:total] = data[name]
-                g.attrs["events_written"] = total
+                self._ds(f"interface/{EVENTS}").attrs["events_written"] = total
             self._write(f"interface/{EVENTS}", grow)
+        self._agree_write()
+        where += k0
+        self._write_pieces([(f"interface/{EVENTS}/{name}", where, data[name]) for name in EVENT_DATASETS])
         self._agree_write()
         return total
 
     def forces(self, fx, fdrive) -> dict:
-        """Rank 0: the per-frame sums over the whole interface and every driven node, in global order, so
-        they are the same bits on any rank count (each rank's values travel to rank 0, which sums them):
-        friction_force = sum of the bonds' x-forces on the block, drive_force = sum of the drive's
-        x-forces, mu = -friction_force / F_N."""
-        if self.size > 1:
-            parts = self.comm.gather((self.frame_site0, fx, self.driven_gid, fdrive), root=0)
-        else:
-            parts = [(self.frame_site0, fx, self.driven_gid, fdrive)]
-        if not self.root:
+        """Rank 0: the per-frame sums over the whole interface and every driven node, correctly rounded
+        (``parallel.exact_sum``: each rank's share summed exactly, the shares merged exactly through a
+        reduction tree, rounded once), so the same bits on any rank count, whatever the order of the
+        terms; collective.  friction_force = sum of the bonds' x-forces on the block, drive_force = sum of
+        the drive's x-forces, mu = -friction_force / F_N.  {} on the other ranks."""
+        got = exact_sums(self.comm if self.size > 1 else None, [fx, np.asarray(fdrive, np.float64)], root=0)
+        if got is None:
             return {}
-        count = fx.shape[0]
-        if len(parts) == 1:                      # one rank: its arrays are already whole and in order
-            fx_all, fd_all = fx, np.asarray(fdrive, np.float64)
-        else:
-            fx_all = np.zeros((count, self.n_sites))
-            gids, fd = [], []
-            for s0, f, g, d in parts:
-                fx_all[:, s0:s0 + f.shape[1]] = f
-                gids.append(g)
-                fd.append(d)
-            gids = np.concatenate(gids) if gids else np.zeros(0, np.int64)
-            fd_all = np.concatenate(fd, axis=1) if fd else np.zeros((count, 0))
-            fd_all = np.ascontiguousarray(fd_all[:, np.argsort(gids, kind="stable")], dtype=np.float64)
-        friction, drive = _ordered_sum(fx_all), _ordered_sum(fd_all)
-        mu = -friction / self.fn if self.fn > 0 else np.full(count, np.nan)
+        friction, drive = got
+        mu = -friction / self.fn if self.fn > 0 else np.full(len(friction), np.nan)
         return {"friction_force": friction, "drive_force": drive, "mu": mu}
 
     def follow(self, sites: tuple):
@@ -586,32 +593,29 @@ class Output:
         are those of the driven nodes ``sites[1]`` (``engine.simulation.Simulation.output_sites``)."""
         self.frame_site0, self.driven_gid = int(sites[0]), np.asarray(sites[1])
 
-    def snapshot(self, k, t, pos, vel, sig, partner):
-        N, M = self.n_nodes, self.n_cells
-        p0 = k * N + self.node0
-        nodes = slice(p0, p0 + len(pos))
-        self._put("VTKHDF/Points", (nodes,), pos)
-        self._put("VTKHDF/PointData/velocity", (nodes,), vel)
-        for j, name in enumerate(("sxx", "syy", "sxy")):
-            self._put(f"VTKHDF/PointData/{name}", (nodes,), sig[:, j])
-        # The bulk cells and the cell flags that never change were written with the file (``_cell_constants``).
-        ns = len(partner)
+    def snapshot(self, k, t, pos, vel, sig, partner, far_pos):
+        """Snapshot ``k`` at time ``t`` (l/c_r) of my OWNED nodes, in global id order: positions ``pos``
+        (n, 3, a), velocities ``vel`` (n, 3), stresses ``sig`` (n, 3: sxx, syy, sxy); of my sites: the
+        substrate column each is bonded to, ``partner`` (-1 broken), and ``far_pos`` (ns, 3) the position of
+        the node at the far end of its interface cell (the partner's substrate node; its top node while
+        broken or on a rigid substrate).  Collective."""
+        partner = np.asarray(partner)
         other = self.bottom_gid_of_site(np.maximum(partner, 0))
-        other = np.where((partner >= 0) & (other >= 0), other, self.top_gid)
-        iface = np.stack([self.top_gid, other], axis=1).astype(np.int64)   # broken: a point-line
-        i0 = k * M + self.n_bulk_cells + self.site0
-        self._put("VTKHDF/Connectivity", (slice(2 * i0, 2 * (i0 + ns)),), iface.ravel())
-        self._put("VTKHDF/CellData/intact", (slice(i0, i0 + ns),), (partner >= 0).astype(np.uint8))
+        far_gid = np.where((partner >= 0) & (other >= 0), other, self.top_gid).astype(np.int64)
+        fields = {"points": pos, "velocity": vel, "sxx": sig[:, 0], "syy": sig[:, 1], "sxy": sig[:, 2]}
+        self._agree_write()            # no rank enters the collective writes after a failure of its own
+        self._write_pieces(snapshot_pieces(self.mesh, self.share, k, fields, far_gid, far_pos,
+                                           (partner >= 0).astype(np.uint8), self.bulk_cells))
         self._agree_write()            # before the collective resize and attribute below
         if self.f is not None:
             def steps():
-                values = self._ds("VTKHDF/Steps/Values")
+                values = self._ds(f"{VTKHDF}/Steps/Values")
                 values.resize((k + 1,))
                 if self.root:
                     values[k] = t
                 # NSteps must never be below len(Values): VTK's reader corrupts memory otherwise.
-                self._ds("VTKHDF/Steps").attrs["NSteps"] = np.int64(k + 1)
-            self._write("VTKHDF/Steps", steps)
+                self._ds(f"{VTKHDF}/Steps").attrs["NSteps"] = np.int64(k + 1)
+            self._write(f"{VTKHDF}/Steps", steps)
         self._agree_write()
 
     def flush(self):
@@ -695,6 +699,66 @@ class Output:
             return False
 
 
+def _split(name, rows, values, cap: int):
+    """A piece as pieces of at most ``cap`` bytes each (cut along its first axis), so that the gathering
+    writer's messages stay small whatever a rank holds."""
+    values = np.asarray(values)
+    per_row = max(values.nbytes // max(len(values), 1), 1)
+    step = max(cap // per_row, 1)
+    if len(values) <= step:
+        return [(name, rows, values)]
+    if isinstance(rows, np.ndarray):
+        return [(name, rows[i:i + step], values[i:i + step]) for i in range(0, len(values), step)]
+    first, rest = rows[0], rows[1:]
+    return [(name, (slice(first.start + i, first.start + min(i + step, len(values))),) + rest, values[i:i + step])
+            for i in range(0, len(values), step)]
+
+
+def _by_dataset(pieces: list):
+    """[(dataset, [(rows, values), ...])]: consecutive pieces of one dataset together, rows None left out."""
+    out = []
+    for name, rows, values in pieces:
+        if not out or out[-1][0] != name:
+            out.append((name, []))
+        if rows is not None:
+            out[-1][1].append((rows, values))
+    return out
+
+
+def _h5_write(ds, parts: list, dxpl=None):
+    """Write ``parts`` [(rows, values)] of dataset ``ds`` as one selection, through HDF5 directly (h5py's
+    slicing skips an empty selection, which would leave a collective write short of a rank): rows a tuple
+    of slices (a block of the leading axes, whole along the others) or an increasing int array (elements
+    of a 1-D dataset), the parts in increasing order in the file; no parts: nothing (this rank's part of a
+    collective write)."""
+    space = ds.id.get_space()
+    space.select_none()
+    chunks = []
+    points = [rows for rows, _ in parts if isinstance(rows, np.ndarray) and len(rows)]
+    if points:
+        space.select_elements(np.concatenate(points).astype(np.uint64).reshape(-1, 1))
+    for rows, values in parts:
+        if isinstance(rows, np.ndarray):
+            if len(rows):
+                chunks.append(np.reshape(values, (len(rows),)))
+            continue
+        start = tuple(r.start for r in rows) + (0,) * (len(ds.shape) - len(rows))
+        count = tuple(r.stop - r.start for r in rows) + tuple(ds.shape[len(rows):])
+        if all(count):
+            space.select_hyperslab(start, count, op=h5s.SELECT_OR)
+            chunks.append(np.reshape(values, count))
+    if not chunks:
+        memory = h5s.create_simple((1,))
+        memory.select_none()
+        data = np.zeros(1, ds.dtype)
+    else:
+        # The file selection runs in increasing order, and so do the parts: their values one after another.
+        data = np.ascontiguousarray(chunks[0] if len(chunks) == 1 else
+                                    np.concatenate([c.reshape(-1) for c in chunks]), ds.dtype)
+        memory = h5s.create_simple(data.shape if len(chunks) == 1 else (data.size,))
+    ds.id.write(memory, space, data, dxpl=dxpl)
+
+
 def _hdf5_error_line(e: BaseException) -> str:
     """An h5py/HDF5 error as one line: HDF5's multi-line "file write failed" text becomes its errno text."""
     import re
@@ -704,14 +768,3 @@ def _hdf5_error_line(e: BaseException) -> str:
     if m:
         return f"{e.__class__.__name__}: {head} ({m.group(1)})"
     return f"{e.__class__.__name__}: {' '.join(text.split())}"
-
-
-def _ordered_sum(values: np.ndarray) -> np.ndarray:
-    """Each row's sum in index order, one addition at a time, ((v0 + v1) + v2) + ...: the documented order,
-    not NumPy's pairwise sum; vectorised over the rows (frames), site by site."""
-    if values.shape[1] == 0:
-        return np.zeros(values.shape[0])
-    total = values[:, 0].copy()
-    for j in range(1, values.shape[1]):
-        total += values[:, j]
-    return total

@@ -8,19 +8,29 @@ every snapshot stacked as one mesh) opens it as a time series with its
 also opens the ``.vtkhdf`` itself.  The sidecar holds no data and
 can be rewritten at any time (``parslip xdmf RUN``).
 
-What it describes, per snapshot k of S (N points, M cells per snapshot; the
-flat datasets hold the snapshots one after the other):
+What it describes, per snapshot k, from the offsets in /VTKHDF/Steps (so it
+serves both layouts of ``io.mesh``: the shared mesh, and the per-step cells
+of files written before), one Uniform grid per step:
 
   Time        /VTKHDF/Steps/Values[k], in l/c_r
-  Geometry    /VTKHDF/Points rows k*N .. k*N+N-1 (x, y, z in a)
-  Topology    Polyline, 2 nodes per element: /VTKHDF/Connectivity entries
-              2kM .. 2kM+2M-1.  Connectivity holds node ids 0..N-1 within the
-              snapshot (VTKHDF adds PointOffsets), which is exactly what a grid
-              whose geometry is rows k*N.. needs, so no shift is applied.  A
-              broken interface bond is a zero-length line (both ends the top node).
+  Geometry    the step's P points of /VTKHDF/Points from PointOffsets[k]
+              (x, y, z in a; P = N nodes, plus one far end per interface site
+              in the shared layout)
+  Topology    Polyline, 2 nodes per element: M cells of /VTKHDF/Connectivity
+              from ConnectivityIdOffsets[k] (the same entries for every step
+              of the shared layout, which stores its bonds once).  Ids run
+              0..P-1 within the step, which is what a grid whose geometry is
+              the step's rows needs, so no shift is applied.  A broken
+              interface bond is a zero-length line.
   Node fields velocity (3 components, internal velocity unit), sxx, syy, sxy
-              (rho c_r^2), rows k*N ..
-  Cell fields interface (1 for an interface bond), intact (1 if intact), rows k*M ..
+              (rho c_r^2), from PointDataOffsets[k]
+  Cell fields interface (1 for an interface bond), intact (1 if intact), from
+              CellDataOffsets[k]
+
+The shared layout's interface cells cannot be told apart from the bulk by a
+viewer otherwise than through ``interface``; one grid per step (rather than a
+spatial collection of the bulk and the interface) keeps what ParaView 5.11
+shows identical to what VTK's own VTKHDF reader shows of the run file.
 
 Each slice is an XDMF ``HyperSlab`` (start, stride, count per axis) of the
 HDF5 dataset named by path, so it holds whatever the storage layout.
@@ -91,29 +101,34 @@ def _heavy_ref(run_path: str, xdmf_path: str) -> str:
 
 
 def _document(v, ref: str) -> str:
-    times = np.asarray(v["Steps"]["Values"][...], dtype=float)
-    S = len(times)
-    N, M = int(v["NumberOfPoints"][0]), int(v["NumberOfCells"][0])
+    steps = v["Steps"]
+    times = np.asarray(steps["Values"][...], dtype=float)
     lines = ['<?xml version="1.0" ?>',
              '<!-- parslip snapshots: positions in a, stress in rho c_r^2, times in l/c_r; '
              f'HyperSlabs of {escape(ref)}; rewrite with `parslip xdmf RUN` -->',
              '<Xdmf Version="2.0">', "<Domain>",
              '<Grid Name="snapshots" GridType="Collection" CollectionType="Temporal">']
-    for k in range(S):
+    at = {name: np.asarray(steps[name][:len(times)], np.int64) for name in
+          ("PartOffsets", "PointOffsets", "ConnectivityIdOffsets")}
+    fields = {(group, name): np.asarray(steps[f"{group}Offsets/{name}"][:len(times)], np.int64)
+              for group, names in (("PointData", POINT_FIELDS), ("CellData", CELL_FIELDS)) for name in names}
+    for k in range(len(times)):
+        part = int(at["PartOffsets"][k])
+        N, M = int(v["NumberOfPoints"][part]), int(v["NumberOfCells"][part])
         lines.append(f'<Grid Name="snapshot {k}" GridType="Uniform">')
         lines.append(f'<Time TimeType="Single" Value="{float(times[k])!r}"/>')
         lines.append(f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{M}">')
-        lines.append(_hyperslab(v, ref, "Connectivity", 2 * k * M, 2 * M, shape=(M, 2)))
+        lines.append(_hyperslab(v, ref, "Connectivity", int(at["ConnectivityIdOffsets"][k]), 2 * M, shape=(M, 2)))
         lines.append("</Topology>")
         lines.append('<Geometry GeometryType="XYZ">')
-        lines.append(_hyperslab(v, ref, "Points", k * N, N))
+        lines.append(_hyperslab(v, ref, "Points", int(at["PointOffsets"][k]), N))
         lines.append("</Geometry>")
-        for group, fields, rows, first in (("PointData", POINT_FIELDS, N, k * N), ("CellData", CELL_FIELDS, M, k * M)):
+        for (group, name), first in fields.items():
+            kind = (POINT_FIELDS if group == "PointData" else CELL_FIELDS)[name]
             center = "Node" if group == "PointData" else "Cell"
-            for name, kind in fields.items():
-                lines.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" Center="{center}">')
-                lines.append(_hyperslab(v, ref, f"{group}/{name}", first, rows))
-                lines.append("</Attribute>")
+            lines.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" Center="{center}">')
+            lines.append(_hyperslab(v, ref, f"{group}/{name}", int(first[k]), N if group == "PointData" else M))
+            lines.append("</Attribute>")
         lines.append("</Grid>")
     lines += ["</Grid>", "</Domain>", "</Xdmf>", ""]
     return "\n".join(lines)

@@ -28,12 +28,17 @@ from .schema import SCHEMA
 # lattice nodes x steps per wall second of the time loop.  float32 moves half the bytes.
 THROUGHPUT = {"float64": 600e6, "float32": 1200e6}
 
-# Bytes of one snapshot per node (Points and velocity: 3 float64 each; sxx, syy, sxy: one each) and per
-# line cell (Types uint8, Offsets int64, Connectivity 2 int64, interface and intact uint8).
-SNAPSHOT_NODE_BYTES = 3 * 8 + 3 * 8 + 3 * 8
-SNAPSHOT_CELL_BYTES = 1 + 8 + 2 * 8 + 1 + 1
-# Per snapshot: one more Offsets entry, 3 NumberOf* counts, Steps/Values, 5 Steps/* offsets and 6 field offsets.
-SNAPSHOT_FIXED_BYTES = 8 + 3 * 8 + 8 + 5 * 8 + 6 * 8
+# The snapshots (``io.mesh``, the shared layout).  Per snapshot: each point (the nodes, and one far end per
+# interface site) has Points and velocity (3 float64 each) and sxx, syy, sxy (one each); each line cell its
+# intact flag (uint8); each site its far end's node id (int64); and the step's time, 5 Steps offsets and 6
+# field offsets.  Once, the bonds: per line cell its type (uint8), offset (int64), 2 connectivity ids
+# (int64) and interface flag (uint8), one more offset and the 3 NumberOf* counts.
+SNAPSHOT_POINT_BYTES = 3 * 8 + 3 * 8 + 3 * 8
+SNAPSHOT_CELL_BYTES = 1
+SNAPSHOT_SITE_BYTES = 8
+SNAPSHOT_FIXED_BYTES = 8 + 5 * 8 + 6 * 8
+MESH_CELL_BYTES = 1 + 8 + 2 * 8 + 1
+MESH_FIXED_BYTES = 8 + 3 * 8
 # Node stresses sxx, syy, sxy in float64, as a snapshot computes them.
 STRESS_BYTES = 3 * 8
 
@@ -64,8 +69,9 @@ def output_bytes(st) -> dict:
 
     interface: frames x sites x (intact 1 + partner 4 + ux, uy, sxy, syy 8 each) + 8 per frame for each
     of time, step, friction_force, drive_force and mu and each term of the energy budget + 8 per site for
-    each of x, kx, ky, delta_b; snapshots: each holds every node
-    (72 B) and every bond as a line cell (27 B: bulk bonds and one per interface site) and a few offsets.
+    each of x, kx, ky, delta_b; snapshots: each holds every node and one far end per interface site (72 B
+    each), a flag per bond (1 B: bulk bonds and one per interface site), each site's far-end node id (8 B)
+    and a few offsets, and the bonds are stored once for all of them (26 B each).
     The run's status (``STATUS_BYTES``, written whole when the file is made) is in the total; the bond
     events add ``EVENT_FILE_BYTES`` per event on top: how many the run makes depends on its physics, so
     they are not in the total.
@@ -76,8 +82,9 @@ def output_bytes(st) -> dict:
     iface = (frames * sites * per_site + frames * 8 * (len(PER_FRAME_1D) + len(ENERGY_DATASETS))
              + sites * 8 * len(SITE_DATASETS))
     cells = bulk_cells(lat) + sites
-    snaps = st.n_snapshots * (lat.n_nodes * SNAPSHOT_NODE_BYTES + cells * SNAPSHOT_CELL_BYTES
-                              + SNAPSHOT_FIXED_BYTES)
+    per_snapshot = ((lat.n_nodes + sites) * SNAPSHOT_POINT_BYTES + cells * SNAPSHOT_CELL_BYTES
+                    + sites * SNAPSHOT_SITE_BYTES + SNAPSHOT_FIXED_BYTES)
+    snaps = st.n_snapshots * per_snapshot + (cells * MESH_CELL_BYTES + MESH_FIXED_BYTES if st.n_snapshots else 0)
     return {"interface": iface, "snapshots": snaps, "total": iface + snaps + STATUS_BYTES}
 
 
