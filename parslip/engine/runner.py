@@ -210,8 +210,9 @@ class Job:
         return st
 
     def _simulation(self):
-        """This rank's simulation, fresh or at the checkpoint's step (every rank reads the checkpoint,
-        which rank 0 validated when it planned the run)."""
+        """This rank's simulation, fresh or at the checkpoint's step (every rank reads its own slab of the
+        checkpoint, which rank 0 validated when it planned the run; a part missing on any rank is bad input
+        on all)."""
         from ..io import checkpoint as ck
         from .simulation import Simulation
         sc = self.sc
@@ -219,7 +220,9 @@ class Job:
                          buffer_events=sc["output.buffer_events"])   # ConfigError alike everywhere
         self.ckpt_out = ck.path_for(self.out)
         if self.plan.checkpoint:
-            sim.restore(*ck.read(self.plan.checkpoint))
+            got = []
+            self.ranks.agree(lambda: got.append(ck.read(self.plan.checkpoint, *sim.slab_ranges(), sim.dtype)))
+            sim.restore(*got[0])
             self.have_checkpoint = os.path.abspath(self.plan.checkpoint) == os.path.abspath(self.ckpt_out)
         self.n_start = sim.n
         return sim
@@ -314,8 +317,10 @@ class Job:
         self.writer.flush()                 # what the checkpoint points past is on disk first
         attrs = self.sim.checkpoint_attrs()
         attrs.update(scene=writer_toml(self.sc), run_id=self.run_id, output=os.path.abspath(self.out))
-        ck.write_collective(self.ranks.comm, self.ckpt_out, self.sim.checkpoint_parts(), attrs,
-                            self.st.lattice.n_nodes, self.st.lattice.n_top_sites)
+        # Each rank writes its own slab: collectively into one file where the output goes through mpio,
+        # else into a part file of its own beside an index.
+        ck.write(self.ranks.comm, self.ckpt_out, self.sim.checkpoint_slab(), attrs, self.sim.checkpoint_table(),
+                 collective=self.writer.mode == "mpio")
         self.have_checkpoint = True
 
     def finish(self):

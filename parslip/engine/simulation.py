@@ -249,49 +249,57 @@ class Simulation:
         ev.count[0] = 0
 
     # ----------------------------------------------------------- checkpoints --
-    def checkpoint_parts(self) -> dict:
-        """This rank's share of a checkpoint (``io.checkpoint``), by global id: node and site arrays."""
-        s = self.state
-        lat = self.setup.lattice
-        d0 = np.zeros(s.n_owned, s.dtype)
-        top = s.own_block == TOP
-        d0[top] = s.drive.drive0[s.own_prow[top], s.own_j[top]]
-        fd = np.zeros(s.n_owned, s.dtype)
-        fd[np.searchsorted(s.gid, s.driven_gid)] = s.drive.force
-        parts = {"gid": s.gid, "u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
-                 "drive0": d0, "drive_force": fd}
-        if lat.has_interface:
-            sl = s.owned_sites()
-            parts["site"] = np.arange(sl.stop - sl.start) + s.site0()
-            parts.update(s.owned_bonds())
-        else:
-            parts["site"] = np.zeros(0, np.int64)
-            parts.update({name: np.zeros(0, s.dtype) for name in BONDS.checkpoint})
-        return parts
+    def checkpoint_table(self) -> np.ndarray:
+        """Every rank's checkpoint slab, [ranks, 4]: node range [first, end), site range [first, end)
+        (``io.checkpoint.slab_table``, from the slab bounds every rank holds)."""
+        from ..io.checkpoint import slab_table
+        return slab_table(self.setup.lattice, self.layout.bounds)
 
-    def restore(self, arrays: dict, attrs: dict):
+    def slab_ranges(self) -> tuple[tuple[int, int], tuple[int, int]]:
+        """(global node ids [first, end), interface sites [first, end)) this rank owns: a checkpoint's rows
+        it writes and reads."""
+        row = self.checkpoint_table()[self.rank]
+        return (int(row[0]), int(row[1])), (int(row[2]), int(row[3]))
+
+    def checkpoint_slab(self):
+        """This rank's share of a checkpoint (``io.checkpoint.Slab``): its OWNED nodes and sites, in global
+        order, each dataset in its checkpoint dtype (the state's float type bitwise)."""
+        from ..io.checkpoint import Slab
+        s = self.state
+        nodes, sites = self.slab_ranges()
+        assert s.n_owned == nodes[1] - nodes[0] and (not s.n_owned or s.gid[0] == nodes[0])
+        # Each array is made once, in place: the slab is the only copy of the state this rank holds.
+        a = {"u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
+             "drive0": np.zeros(s.n_owned, s.dtype), "drive_force": np.zeros(s.n_owned, s.dtype)}
+        top = s.own_block == TOP
+        a["drive0"][top] = s.drive.drive0[s.own_prow[top], s.own_j[top]]
+        a["drive_force"][s.driven_gid - nodes[0]] = s.drive.force
+        bonds = s.owned_bonds() if self.setup.lattice.has_interface else \
+            {name: np.zeros(0, s.dtype) for name in BONDS.checkpoint}
+        for name, row in bonds.items():
+            a[name] = row.astype(BONDS.dtypes[name] or s.dtype, copy=False)
+        return Slab(nodes, sites, a)
+
+    def restore(self, slab, attrs: dict):
         """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
 
-        Every rank takes its OWNED part by global id, then halo exchanges fill the HALO copies."""
+        ``slab`` holds this rank's OWNED nodes and sites (``io.checkpoint.read`` of ``slab_ranges``);
+        the halo exchange then fills the HALO copies (collective)."""
         self._phase("restore")
         s, st = self.state, self.setup
+        if (tuple(slab.nodes), tuple(slab.sites)) != self.slab_ranges():
+            raise ValueError(f"restore: a slab of nodes {slab.nodes}, sites {slab.sites}; this rank owns "
+                             f"{self.slab_ranges()}")
         self.n = n = int(attrs["step"])
-        for level, name in ((n, "u"), (n - 1, "u_prev")):
-            s.set_owned_u(level, arrays[name][s.gid])
+        a = slab.arrays
+        s.set_owned_u(n, a["u"])
+        s.set_owned_u(n - 1, a["u_prev"])
         top = s.own_block == TOP
-        s.drive.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
-        s.drive.force[:] = arrays["drive_force"][s.driven_gid]
+        s.drive.drive0[s.own_prow[top], s.own_j[top]] = a["drive0"][top]
+        s.drive.force[:] = a["drive_force"][s.driven_gid - slab.nodes[0]]
         if st.lattice.has_interface:
-            sl = s.owned_sites()
-            sites = np.arange(sl.stop - sl.start) + s.site0()
-            s.set_owned_bonds({name: arrays[name][sites] for name in BONDS.checkpoint})
-        if self.comm is not None:
-            # Both levels: a rule may read u(n - 1) of HALO sites too (the slip velocity).
-            from ..parallel.halo_mpi import mpi_complete, mpi_post
-            for level in (n - 1, n):
-                bx, by, tx, ty = s.level(level)
-                mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
-                mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
+            s.set_owned_bonds({name: a[name] for name in BONDS.checkpoint})
+        self.refill_halos()
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
         self.events_written = int(attrs["events_written"])
@@ -307,7 +315,20 @@ class Simulation:
         self._snap = {k: snaps + m for m, k in enumerate(later)}
         self.snapshots_total = snaps + len(later)
         self.snapshots_written = snaps
-        self._energy_restore(attrs)
+        self._energy_restore(attrs, a["u_prev"][s.driven_gid - slab.nodes[0]])
+
+    def refill_halos(self):
+        """Fill every HALO copy from the rank that owns it, at both Verlet levels u(n) and u(n - 1) (a rule
+        may read u(n - 1) of HALO sites: the slip velocity), with the bond rows that travel; collective.
+        After a restore, which sets OWNED values only."""
+        if self.comm is None:
+            return
+        from ..parallel.halo_mpi import mpi_complete, mpi_post
+        s = self.state
+        for level in (self.n - 1, self.n):
+            bx, by, tx, ty = s.level(level)
+            mpi_post(self.plan, bx, by, tx, ty, s.iface.bonds)
+            mpi_complete(self.plan, bx, by, tx, ty, s.iface.bonds)
 
     # ---------------------------------------------------------- energy budget --
     def _pairs(self, parts) -> np.ndarray:
@@ -377,9 +398,10 @@ class Simulation:
                                                np.int64)}
         return attrs if self.comm is None else self.comm.bcast(attrs, root=0)
 
-    def _energy_restore(self, attrs: dict):
-        """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)."""
-        b, s = self.budget, self.state
+    def _energy_restore(self, attrs: dict, driven_u_prev: np.ndarray):
+        """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)
+        (``driven_u_prev``: [slots, 2], the driven nodes' rows of the checkpoint)."""
+        b = self.budget
         tot = attrs.get("energy_totals")
         b.base[:] = 0.0
         b.acc[:] = 0
@@ -389,8 +411,7 @@ class Simulation:
                 b.acc[:] = np.asarray(attrs["energy_quanta"], np.int64)
             base = attrs.get("energy_base")
             self.energy_base = None if base is None or not np.all(np.isfinite(base)) else np.asarray(base)
-        u_prev = s.owned_u(self.n - 1)
-        b.prev[:] = u_prev[np.searchsorted(s.gid, s.driven_gid)].T
+        b.prev[:] = driven_u_prev.T
 
     def checkpoint_attrs(self) -> dict:
         """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""
