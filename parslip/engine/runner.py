@@ -285,9 +285,22 @@ class Job:
             if self.prog is not None:
                 self.prog.done()
         outcome = self.outcome()
+        self._memory_line()
         if self.ranks.rank == 0:
             self._report(outcome)
         return outcome
+
+    def _memory_line(self):
+        """Collective: each rank's peak resident memory so far (getrusage), gathered in one collective;
+        rank 0 logs ``memory: peak RSS MiB rank 0 X, median Y, max Z``."""
+        import resource
+
+        import numpy as np
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / (2.0 ** 20 if sys.platform == "darwin" else 1024.0)
+        peaks = [peak] if self.ranks.comm is None else self.ranks.comm.gather(peak, root=0)
+        if self.ranks.rank == 0:
+            self.log.info(f"memory: peak RSS MiB rank 0 {peaks[0]:.1f}, median {float(np.median(peaks)):.1f}, "
+                          f"max {max(peaks):.1f}")
 
     def loop(self):
         """Compile, then advance to the end or to an agreed stop, writing the agreed checkpoints."""
