@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
+from ..io.contract import ENERGY_SINKS, ENERGY_SOURCES
 from ..model.interface import BONDS
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
@@ -114,7 +115,7 @@ class Simulation:
         cs = np.array([sd * scale[bg.Q_DAMP], -0.5 * scale[bg.Q_DAMP] / cf, 0.5 * scale[bg.Q_KIN] / (dt * dt),
                        -0.5 * scale[bg.Q_EL] / cf])
         return L.Budget(acc=np.zeros((bg.N_Q, 2), np.int64), work=np.zeros((2, slots)),
-                        broken=np.zeros((2, sites)), formed=np.zeros((2, sites)), base=np.zeros((2, bg.N_TERMS)),
+                        sites=np.zeros((len(bg.SITE_TERMS), 2, sites)), base=np.zeros((2, bg.N_TERMS)),
                         prev=np.zeros((2, slots)), cs=cs, scale=scale)
 
     def step(self):
@@ -342,8 +343,9 @@ class Simulation:
         return [x] if self.comm is None else self.comm.gather(x, root=0)
 
     def budget_frames(self, count: int) -> dict | None:
-        """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started:
-        work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual (contract
+        """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started: the
+        sources (contract ``ENERGY_SOURCES``: work_drive, work_normal, formed, contact_switched) equal the
+        sinks (``ENERGY_SINKS``: elastic, kinetic, contact, damping, broken) plus the residual (contract
         ``ENERGY_DATASETS``); collective.  The damping is summed in the loop with ``output.energy =
         "checked"`` and the body drag, else it is the balance and the residual NaN.  The state's terms at the drive's start come from its frame
         (or from the checkpoint a run continues); without them (a checkpoint that predates the budget)
@@ -354,15 +356,16 @@ class Simulation:
             return None
         tot = self._pairs(parts)
         if self.energy_base is None and fr.cursor[L.C_BASE] == 0 and fr.step[0] == self.setup.n_drive_start:
-            self.energy_base = tot[0, [bg.KINETIC, bg.ELASTIC, bg.LOAD_Y]].copy()
-        base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+            self.energy_base = tot[0, list(bg.STATE)].copy()
+        base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
         e = 1.0 / self.setup.material.c_r ** 2
+        change = {term: (tot[:, term] - base[k]) * e for k, term in enumerate(bg.STATE) if term != bg.LOAD_Y}
         out = {"work_drive": tot[:, bg.W_DRIVE] * e, "damping": tot[:, bg.DAMPING] * e,
                "broken": tot[:, bg.BROKEN] * e, "formed": tot[:, bg.FORMED] * e,
-               "kinetic": (tot[:, bg.KINETIC] - base[0]) * e, "elastic": (tot[:, bg.ELASTIC] - base[1]) * e,
-               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[2]) * e}
-        balance = (out["work_drive"] + out["work_normal"] + out["formed"]
-                   - (out["elastic"] + out["kinetic"] + out["broken"]))
+               "kinetic": change[bg.KINETIC], "elastic": change[bg.ELASTIC],
+               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[bg.STATE.index(bg.LOAD_Y)]) * e,
+               "contact": change[bg.CONTACT], "contact_switched": tot[:, bg.SWITCHED] * e}
+        balance = sum(out[k] for k in ENERGY_SOURCES) - sum(out[k] for k in ENERGY_SINKS if k != "damping")
         if self.params.drag or self.setup.damping.zeta == 0:
             out["residual"] = balance - out["damping"]
         else:
@@ -377,7 +380,8 @@ class Simulation:
         (fsum and its exact remainder), and the state's terms at the drive's start."""
         b = self.budget
         mine = np.zeros((2, bg.N_TERMS))
-        for acc, term in ((b.work, bg.W_DRIVE), (b.broken, bg.BROKEN), (b.formed, bg.FORMED)):
+        bg.total(b.work, mine, bg.W_DRIVE)
+        for acc, term in zip(b.sites, bg.SITE_TERMS):
             bg.total(acc, mine, term)
         for k in range(bg.N_TERMS):                 # what an earlier restart carried over, without a rounding
             bg.add(mine, k, b.base[0, k])
@@ -392,7 +396,7 @@ class Simulation:
             hi = np.array([math.fsum(stack[:, :, t].ravel()) for t in range(bg.N_TERMS)])
             lo = np.array([math.fsum(list(stack[:, :, t].ravel()) + [-hi[t]]) for t in range(bg.N_TERMS)])
             totals = [sum(p[1][q] for p in parts) for q in range(bg.N_Q)]      # exact, in quanta
-            base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+            base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
             attrs = {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
                      "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in totals],
                                                np.int64)}
@@ -406,12 +410,21 @@ class Simulation:
         b.base[:] = 0.0
         b.acc[:] = 0
         if self.rank == 0:
-            b.base[:] = np.nan if tot is None else np.asarray(tot, np.float64)
+            b.base[:] = np.nan if tot is None else self._later_terms(tot, bg.N_TERMS)
             if tot is not None:
                 b.acc[:] = np.asarray(attrs["energy_quanta"], np.int64)
+            # None where not known yet (a checkpoint before the drive's start): the drive's first frame gives it.
             base = attrs.get("energy_base")
-            self.energy_base = None if base is None or not np.all(np.isfinite(base)) else np.asarray(base)
+            known = base is not None and not np.isnan(base).all()
+            self.energy_base = self._later_terms(np.asarray(base)[None], len(bg.STATE))[0] if known else None
         b.prev[:] = driven_u_prev.T
+
+    def _later_terms(self, values, n: int) -> np.ndarray:
+        """A checkpoint's budget terms ([rows, terms]) padded to ``n`` terms: a checkpoint written before the
+        contact's terms existed carries none, 0 without a contact and unknown (NaN) with one."""
+        values = np.asarray(values, np.float64)
+        fill = np.nan if self.setup.law.contact else 0.0
+        return np.concatenate([values, np.full((values.shape[0], n - values.shape[1]), fill)], axis=1)
 
     def checkpoint_attrs(self) -> dict:
         """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""

@@ -7,7 +7,9 @@ geometry and the stiffnesses.  It is kept in a JSON file under
 ``$PARSLIP_CACHE_DIR`` (default ``$XDG_CACHE_HOME/parslip``, else
 ``~/.cache/parslip``), keyed by those inputs, so a sweep or a rerun starts at
 once.  The value stored is the value computed, so a cached run is the same
-run.  Only the process that derives the scene (rank 0) reads or writes it;
+run.  VERSION 2: omega_max rounded up to 24 significant bits, the same on
+every host (``model.stability``); version 1's unrounded values are never
+served, as VERSION is part of every key.  Only the process that derives the scene (rank 0) reads or writes it;
 an unwritable cache is skipped silently.
 """
 from __future__ import annotations
@@ -18,7 +20,7 @@ import json
 import os
 import tempfile
 
-VERSION = 1
+VERSION = 2          # 2: omega_max rounded up to stability.OMEGA_BITS bits
 
 
 def cache_dir() -> str:

@@ -437,7 +437,12 @@ class Output:
                     if name in g:
                         g[name].resize(nf, axis=0)
             if ENERGY in f:
-                for name in ENERGY_DATASETS:
+                for name, meaning in ENERGY_DATASETS.items():
+                    if name not in f[ENERGY]:    # a file from before the term existed: NaN for its frames
+                        old = f[ENERGY]["residual"]
+                        ds = f[ENERGY].create_dataset(name, data=np.full(old.shape, np.nan), maxshape=(None,),
+                                                      chunks=old.chunks)
+                        ds.attrs["units"], ds.attrs["meaning"] = "m c_r^2", meaning
                     f[ENERGY][name].resize(nf, axis=0)
             if EVENTS in g:                  # events past the checkpoint's are written again from there
                 for name, (dt_, unit) in EVENT_DATASETS.items():

@@ -102,7 +102,8 @@ class Damping:
         if not self.rated:
             return dt_max(omega_max)
         b = max(self.beta(k) for k in kns)
-        return math.sqrt(b * b + dt_max(omega_max) ** 2) - b
+        d = dt_max(omega_max)
+        return math.sqrt(b * b + d * d) - b
 
     def mode_rate(self, omega: float, kn: float) -> float:
         """Twice the rate (c/a) at which a mode of frequency omega (c/a) loses amplitude in a block of normal

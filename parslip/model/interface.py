@@ -83,6 +83,7 @@ Units: lengths in a, stiffnesses in m c^2/a^2.
 """
 from __future__ import annotations
 
+import math
 from collections import namedtuple
 from dataclasses import dataclass
 
@@ -193,22 +194,33 @@ LONGEST_CORRELATION = 10.0      # contact lengths: a longer correlation is smoot
 def random_field(n: int, cv: float, correlation: float, seed: int) -> np.ndarray:
     """The lognormal factor L of the module docstring over n sites: mean about 1, coefficient of variation
     about ``cv``, correlation length ``correlation`` (a), taken as at most ``LONGEST_CORRELATION`` n a so
-    that its kernel stays within a few contact lengths; the same for a seed on every rank."""
+    that its kernel stays within a few contact lengths; the same for a seed on every rank and every host.
+
+    Portable: the smoothing is a sum over the kernel's taps in a fixed order (not np.convolve, a BLAS
+    dot whose kernel OpenBLAS picks per CPU), the sums of the kernel, mean and variance are math.fsum
+    (exact), and exp and log1p are libm's scalar ones (NumPy's vector exp differs in the last bit
+    between CPUs)."""
     if cv == 0 or n == 0:
         return np.ones(n)
     rng = np.random.Generator(np.random.PCG64(seed))
-    s = min(correlation, LONGEST_CORRELATION * n) / np.sqrt(2.0)    # kernel width, sites
-    pad = int(np.ceil(4 * s))
+    s = min(correlation, LONGEST_CORRELATION * n) / math.sqrt(2.0)    # kernel width, sites
+    pad = int(math.ceil(4 * s))
     w = rng.standard_normal(n + 2 * pad)
     if s > 0:
-        k = np.arange(-pad, pad + 1)
-        kernel = np.exp(-0.5 * (k / s) ** 2)
-        w = np.convolve(w, kernel / kernel.sum(), mode="valid")
+        kernel = [math.exp(-0.5 * (k / s) * (k / s)) for k in range(-pad, pad + 1)]
+        total = math.fsum(kernel)
+        smooth = np.zeros(n)
+        for j, kj in enumerate(kernel):             # symmetric: the same as a convolution
+            smooth += (kj / total) * w[j:j + n]
+        w = smooth
     else:
         w = w[pad:pad + n]
-    g = (w - w.mean()) / w.std() if n > 1 and w.std() > 0 else np.zeros(n)
-    s2 = np.log1p(cv * cv)
-    return np.exp(np.sqrt(s2) * g - 0.5 * s2)
+    mean = math.fsum(w.tolist()) / n
+    dev = w - mean
+    std = math.sqrt(math.fsum((dev * dev).tolist()) / n)
+    g = dev / std if n > 1 and std > 0 else np.zeros(n)
+    s2 = math.log1p(cv * cv)
+    return np.array([math.exp(x) for x in (math.sqrt(s2) * g - 0.5 * s2).tolist()])
 
 
 @dataclass(frozen=True)

@@ -34,9 +34,15 @@ from .physics import ROW_HEIGHT
 
 BOTTOM, TOP = 0, 1
 
-# Neighbour slots k = 0..5 at angles k*60 degrees: (dx, dy) in units of a.
-DIRECTIONS = np.array([[np.cos(k * np.pi / 3), np.sin(k * np.pi / 3)] for k in range(6)])
-DIRECTIONS[np.abs(DIRECTIONS) < 1e-15] = 0.0
+# Neighbour slots k = 0..5 at angles k*60 degrees: (dx, dy) in units of a.  The values are
+# (cos, sin)(k pi/3) as libm rounds them (an |entry| below 1e-15 set to 0), written out so that no
+# host's trigonometry enters the set-up: NumPy's vector cos differs in the last bit between CPUs.
+DIRECTIONS = np.array([[1.0, 0.0],
+                       [0.5000000000000001, 0.8660254037844386],
+                       [-0.4999999999999998, 0.8660254037844387],
+                       [-1.0, 0.0],
+                       [-0.5000000000000004, -0.8660254037844384],
+                       [0.5000000000000001, -0.8660254037844386]])
 
 # Node kinds for the boundary conditions.
 FREE, FIXED, DRIVEN = 0, 1, 2

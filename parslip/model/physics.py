@@ -45,13 +45,14 @@ def max_nu(model: str) -> float:
 
 
 def born_stiffness(c_l: float, c_s: float, a: float = 1.0) -> tuple[float, float]:
-    """Eq. 2.2: k_n = (c_l^2 - c_s^2/3)/a^2, k_t = (c_s^2 - c_l^2/3)/a^2 (m=1)."""
-    return (c_l**2 - c_s**2 / 3.0) / a**2, (c_s**2 - c_l**2 / 3.0) / a**2
+    """Eq. 2.2: k_n = (c_l^2 - c_s^2/3)/a^2, k_t = (c_s^2 - c_l^2/3)/a^2 (m=1).  Squares as products, not
+    libm's pow, which is not correctly rounded."""
+    return (c_l * c_l - c_s * c_s / 3.0) / (a * a), (c_s * c_s - c_l * c_l / 3.0) / (a * a)
 
 
 def born_wave_speeds(kn: float, kt: float, a: float = 1.0) -> tuple[float, float]:
     """Inverse of Eq. 2.2: c_l^2 = a^2 (9k_n + 3k_t)/8, c_s^2 = a^2 (3k_n + 9k_t)/8."""
-    return math.sqrt(a**2 * (9 * kn + 3 * kt) / 8), math.sqrt(a**2 * (3 * kn + 9 * kt) / 8)
+    return math.sqrt(a * a * (9 * kn + 3 * kt) / 8), math.sqrt(a * a * (3 * kn + 9 * kt) / 8)
 
 
 def _surface_det(xi: float, r: float, eta_frac: float) -> float:
@@ -70,13 +71,15 @@ def _surface_det(xi: float, r: float, eta_frac: float) -> float:
     qp = math.sqrt(1.0 - xi * xi / c_l2)
     qs = math.sqrt(1.0 - xi * xi)
     # Modes u ~ U exp(ik(x - ct) + q k y); d/dx -> i, d/dy -> q.
-    # P: U = (i, qp);  S: U = (qs, -i).  Rows: traction sigma_xy, sigma_yy.
-    m = np.empty((2, 2), complex)
-    for col, (ux, uy, q) in enumerate(((1j, qp, qp), (qs, -1j, qs))):
-        m[0, col] = (mu + eta_frac) * q * ux + (mu - eta_frac) * 1j * uy
-        m[1, col] = (lam + 2 * mu) * q * uy + lam * 1j * ux
-    d = np.linalg.det(m)
-    return d.real if abs(d.real) >= abs(d.imag) else d.imag
+    # P: U = (i, qp);  S: U = (qs, -i).  Rows: traction sigma_xy, sigma_yy:
+    #   M = [[i p, s], [t, i v]],  det M = -(p v + s t), real.
+    # Written out rather than LAPACK's complex LU (np.linalg.det), whose last bits depend on the CPU's
+    # vector kernels: + - * / and sqrt in a fixed order give the same root on every host.
+    p = (mu + eta_frac) * qp + (mu - eta_frac) * qp            # sigma_xy of P, over i
+    t = (lam + 2 * mu) * qp * qp - lam                          # sigma_yy of P
+    s = (mu + eta_frac) * qs * qs + (mu - eta_frac)             # sigma_xy of S
+    v = lam * qs - (lam + 2 * mu) * qs                          # sigma_yy of S, over i
+    return -(p * v) - s * t
 
 
 def _bisect(f, a: float, b: float) -> float:
@@ -125,7 +128,7 @@ def born_surface_ratio(kn: float, kt: float) -> float:
     """
     _, c_s = born_wave_speeds(kn, kt)
     c_l, _ = born_wave_speeds(kn, kt)
-    eta_frac = 0.75 * kt / c_s**2
+    eta_frac = 0.75 * kt / (c_s * c_s)
     return _surface_root(c_l / c_s, eta_frac)
 
 

@@ -10,8 +10,23 @@ dt < a/c_l is far too loose for the stiff substrate.
 
 Breaking bonds and prescribing driven x-coordinates only remove stiffness
 or degrees of freedom, which cannot raise omega_max (Cauchy interlacing).
+
+The same bits on any host: the solvers behind omega_max are not portable in
+their last bits (ARPACK's and LAPACK's vector kernels are chosen per CPU by
+OpenBLAS: push's Lanczos value is 24.45511710235529 with the default kernel on
+an AVX-512 host and 24.45511710235539 with the Haswell kernel, 4e-15 apart).
+So omega_max is rounded UP to OMEGA_BITS = 24 significant bits
+(``round_up``: 6e-8 relative, far coarser than the solvers' 1e-9 tolerance and
+the 1e-14 host-to-host spread, and upward, so 2/omega_max stays a safe
+limit).  Every host then gets the same omega_max, unless the exact value lies
+within that spread of a 24-bit boundary (a chance of about 1e-7 per scene,
+which ``tests/test_portable.py`` would catch on the shipped scenes).  The
+bound's ``bulk_omega2`` uses only Python's scalar arithmetic and libm's cos,
+no vector or LAPACK code.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -81,21 +96,38 @@ def stiffness_matrix(lattice: Lattice, kn, kt, kx: float, ky: float, mode: str =
 
 
 LANCZOS_MAX_DOFS = 60_000
+OMEGA_BITS = 24         # significant bits omega_max is rounded up to (module docstring)
+
+
+def round_up(x: float, bits: int = OMEGA_BITS) -> float:
+    """x > 0 rounded up to ``bits`` significant bits: the smallest m 2^e >= x with m < 2^bits an integer.
+    Exact (frexp, ceil and ldexp only), so the same on every host."""
+    m, e = math.frexp(x)                  # x = m 2^e, 1/2 <= m < 1
+    return math.ldexp(math.ceil(math.ldexp(m, bits)), e - bits)
 
 
 def bulk_omega2(kn: float, kt: float) -> float:
     """max over the Brillouin zone of omega^2(k) for an infinite Born lattice.
 
-    D(k) = sum_j (1 - cos k.a_j) [(k_n - k_t) n_j n_j^T + k_t I]; a grid
-    search, then a local refinement of its best point.
+    D(k) = sum_j (1 - cos k.a_j) [(k_n - k_t) n_j n_j^T + k_t I] (six neighbours j); a grid
+    search, then a local refinement of its best point (Nelder-Mead).  Portable: D's largest eigenvalue
+    in closed form, (a + c)/2 + sqrt(((a - c)/2)^2 + b^2) for D = [[a, b], [b, c]], in Python's scalar
+    arithmetic in a fixed order, and math.cos (libm) rather than NumPy's vector cos or LAPACK, whose
+    last bits depend on the CPU's vector units.
     """
     from scipy.optimize import minimize
 
-    mats = [(kn - kt) * np.outer(d, d) + kt * np.eye(2) for d in DIRECTIONS]
+    d = kn - kt
+    mats = [(nx, ny, d * nx * nx + kt, d * nx * ny, d * ny * ny + kt) for nx, ny in DIRECTIONS.tolist()]
 
     def lam(k):
-        D = sum((1 - np.cos(k[0] * d[0] + k[1] * d[1])) * m for d, m in zip(DIRECTIONS, mats))
-        return np.linalg.eigvalsh(D)[-1]
+        kx, ky = float(k[0]), float(k[1])
+        a = b = c = 0.0
+        for nx, ny, kxx, kxy, kyy in mats:
+            w = 1.0 - math.cos(kx * nx + ky * ny)
+            a, b, c = a + w * kxx, b + w * kxy, c + w * kyy
+        h = 0.5 * (a - c)
+        return 0.5 * (a + c) + math.sqrt(h * h + b * b)
 
     g = np.linspace(-2 * np.pi, 2 * np.pi, 121)
     best = max(((lam((a, b)), (a, b)) for a in g for b in g), key=lambda p: p[0])
@@ -116,6 +148,9 @@ def omega_max(lattice: Lattice, kn, kt, kx: float, ky: float, spring: float = 0.
     pair other nodes; it is within 0.5 % of the exact value for the paper's
     scenes.  A loader spring k_s on the driven nodes adds at most k_s to omega^2 (a diagonal term), in the
     bound as in the assembled stiffness.
+
+    Either value is returned rounded up to OMEGA_BITS significant bits (``round_up``), so that every
+    x86-64 host derives the same omega_max, dt and step counts from a scene (module docstring).
     """
     ndof = 2 * lattice.n_nodes
     if ndof > LANCZOS_MAX_DOFS:
@@ -123,7 +158,7 @@ def omega_max(lattice: Lattice, kn, kt, kx: float, ky: float, spring: float = 0.
         w2 = max(bulk_omega2(kn[b], kt[b]) for b in blocks)
         if lattice.has_interface:
             w2 += 2 * max(kx, ky)
-        return float(np.sqrt(w2 + spring)), "bound"
+        return round_up(math.sqrt(w2 + spring)), "bound"
     from scipy.sparse.linalg import eigsh
     K, free = stiffness_matrix(lattice, kn, kt, kx, ky, mode, spring, drive_rows)
     K = K[free][:, free]
@@ -132,7 +167,7 @@ def omega_max(lattice: Lattice, kn, kt, kx: float, ky: float, spring: float = 0.
     else:
         lam = eigsh(K, k=1, which="LA", tol=1e-9, return_eigenvectors=False,
                     v0=np.ones(K.shape[0]), maxiter=100000)[0]
-    return float(np.sqrt(lam)), "lanczos"
+    return round_up(math.sqrt(float(lam))), "lanczos"
 
 
 def dt_max(omega: float) -> float:
