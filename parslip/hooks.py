@@ -11,7 +11,8 @@ once, when it is first imported, and the code asks ``hooks.get(NAME)``:
                             stops answering: the watchdog must fire)
   block_at=RANK:STEP        that rank skips the agreement at STEP and waits in a lone barrier instead (a
                             rank that answers heartbeats but never reaches the collective the others are in)
-  kill_in_checkpoint=K      the process writing the K-th checkpoint kills itself with SIGKILL halfway through
+  kill_in_checkpoint=[RANK:]K  that rank (0 when not given) kills itself with SIGKILL halfway through writing
+                            its share of the K-th checkpoint
   write_error_at_frame=K    writing interface frame K or later fails with ENOSPC (a full disk)
   hold_at_frame=K           rank 0, about to write interface frame K or later, creates OUT.held and waits
                             (up to 120 s) until the test removes it: a test can fill the disk mid-run
@@ -32,11 +33,12 @@ VARIABLE = "PARSLIP_TEST_HOOKS"
 
 # name: how its value is read
 _PAIRS = ("raise_at", "stop_at", "block_at")
-_INTS = ("kill_in_checkpoint", "write_error_at_frame", "hold_at_frame", "hold_before_picture")
+_INTS = ("write_error_at_frame", "hold_at_frame", "hold_before_picture")
+_RANK_OPTIONAL = ("kill_in_checkpoint",)        # [RANK:]K, stored as (RANK, K)
 
 
 def parse(text: str | None) -> dict:
-    """``"raise_at=1:300;kill_in_checkpoint=2"`` -> {"raise_at": (1, 300), "kill_in_checkpoint": 2}."""
+    """``"raise_at=1:300;kill_in_checkpoint=2"`` -> {"raise_at": (1, 300), "kill_in_checkpoint": (0, 2)}."""
     out: dict = {}
     for item in (text or "").split(";"):
         item = item.strip()
@@ -45,8 +47,9 @@ def parse(text: str | None) -> dict:
         name, _, value = item.partition("=")
         name, value = name.strip(), value.strip()
         try:
-            if name in _PAIRS:
-                a, b = (int(v) for v in value.split(":"))
+            if name in _PAIRS + _RANK_OPTIONAL:
+                given = value if ":" in value or name in _PAIRS else "0:" + value
+                a, b = (int(v) for v in given.split(":"))
                 if a < 0 or b < 0:
                     raise ValueError
                 out[name] = (a, b)
@@ -59,9 +62,10 @@ def parse(text: str | None) -> dict:
                 raise KeyError
         except KeyError:
             raise ConfigError(f"{VARIABLE}: {name!r} = {value!r}: unknown hook; accepted: "
-                              f"{', '.join(_PAIRS + _INTS)}") from None
+                              f"{', '.join(_PAIRS + _INTS + _RANK_OPTIONAL)}") from None
         except ValueError:
-            form = "RANK:STEP (two integers >= 0)" if name in _PAIRS else "an integer >= 0"
+            form = "RANK:STEP (two integers >= 0)" if name in _PAIRS else \
+                "[RANK:]K (integers >= 0)" if name in _RANK_OPTIONAL else "an integer >= 0"
             raise ConfigError(f"{VARIABLE}: {name} = {value!r}: accepted: {form}") from None
     return out
 

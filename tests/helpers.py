@@ -73,7 +73,7 @@ def reference(sim: Simulation) -> ReferenceSimulation:
     ref.u_prev[:ref.n_owned] = sim.u_prev
     ref.partner[ref.own_sites] = sim.state.owned_partner()
     ref.x0[ref.own_sites] = sim.state.owned_x0()
-    ref.u_drive0[:ref.n_owned] = sim.checkpoint_parts()["drive0"]      # where the driven face started
+    ref.u_drive0[:ref.n_owned] = sim.checkpoint_slab().arrays["drive0"]      # where the driven face started
     ref.n = sim.n
     return ref
 

@@ -90,7 +90,7 @@ def _budget(sim, steps):
             t["stored"] += stored - en.V(un)
             counts = sim.counters.copy()
         span = new - uo
-        t["work_drive"] += 0.5 * float(sim.checkpoint_parts()["drive_force"] @ span[:, 0])
+        t["work_drive"] += 0.5 * float(sim.checkpoint_slab().arrays["drive_force"] @ span[:, 0])
         t["work_normal"] += 0.5 * float(np.sum(fext * span))
         if form == "absolute":
             t["damping"] += zeta * np.sum(span ** 2) / (4 * dt)

@@ -129,13 +129,11 @@ sim.run(until=51)                                    # one step: one exchange
 halo = s.iface.bonds[row, g.tlo:g.thi][~own]
 assert (~own).sum() > 0 and np.array_equal(halo, f(site[~own])), "the drawn row did not travel"
 path = sys.argv[1]
-checkpoint.write_collective(comm, path, sim.checkpoint_parts(), sim.checkpoint_attrs(), setup.lattice.n_nodes,
-                            setup.lattice.n_top_sites)
-comm.Barrier()
-arrays, attrs = checkpoint.read(path)
-assert np.array_equal(arrays["drawn"], f(np.arange(setup.lattice.n_top_sites))), "the checkpoint lost the row"
+checkpoint.write(comm, path, sim.checkpoint_slab(), sim.checkpoint_attrs(), sim.checkpoint_table())
+whole, attrs = checkpoint.read(path, (0, setup.lattice.n_nodes), (0, setup.lattice.n_top_sites))
+assert np.array_equal(whole.arrays["drawn"], f(np.arange(setup.lattice.n_top_sites))), "the checkpoint lost the row"
 again = Simulation(setup, comm=comm)
-again.restore(arrays, attrs)
+again.restore(*checkpoint.read(path, *again.slab_ranges()))
 t = again.state
 assert np.array_equal(t.iface.bonds[row, g.tlo:g.thi], f(site)), "the restart did not restore the row"
 for name in law.BONDS.names:

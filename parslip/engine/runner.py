@@ -210,8 +210,9 @@ class Job:
         return st
 
     def _simulation(self):
-        """This rank's simulation, fresh or at the checkpoint's step (every rank reads the checkpoint,
-        which rank 0 validated when it planned the run)."""
+        """This rank's simulation, fresh or at the checkpoint's step (every rank reads its own slab of the
+        checkpoint, which rank 0 validated when it planned the run; a part missing on any rank is bad input
+        on all)."""
         from ..io import checkpoint as ck
         from .simulation import Simulation
         sc = self.sc
@@ -219,7 +220,9 @@ class Job:
                          buffer_events=sc["output.buffer_events"])   # ConfigError alike everywhere
         self.ckpt_out = ck.path_for(self.out)
         if self.plan.checkpoint:
-            sim.restore(*ck.read(self.plan.checkpoint))
+            got = []
+            self.ranks.agree(lambda: got.append(ck.read(self.plan.checkpoint, *sim.slab_ranges(), sim.dtype)))
+            sim.restore(*got[0])
             self.have_checkpoint = os.path.abspath(self.plan.checkpoint) == os.path.abspath(self.ckpt_out)
         self.n_start = sim.n
         return sim
@@ -282,9 +285,22 @@ class Job:
             if self.prog is not None:
                 self.prog.done()
         outcome = self.outcome()
+        self._memory_line()
         if self.ranks.rank == 0:
             self._report(outcome)
         return outcome
+
+    def _memory_line(self):
+        """Collective: each rank's peak resident memory so far (getrusage), gathered in one collective;
+        rank 0 logs ``memory: peak RSS MiB rank 0 X, median Y, max Z``."""
+        import resource
+
+        import numpy as np
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / (2.0 ** 20 if sys.platform == "darwin" else 1024.0)
+        peaks = [peak] if self.ranks.comm is None else self.ranks.comm.gather(peak, root=0)
+        if self.ranks.rank == 0:
+            self.log.info(f"memory: peak RSS MiB rank 0 {peaks[0]:.1f}, median {float(np.median(peaks)):.1f}, "
+                          f"max {max(peaks):.1f}")
 
     def loop(self):
         """Compile, then advance to the end or to an agreed stop, writing the agreed checkpoints."""
@@ -314,8 +330,10 @@ class Job:
         self.writer.flush()                 # what the checkpoint points past is on disk first
         attrs = self.sim.checkpoint_attrs()
         attrs.update(scene=writer_toml(self.sc), run_id=self.run_id, output=os.path.abspath(self.out))
-        ck.write_collective(self.ranks.comm, self.ckpt_out, self.sim.checkpoint_parts(), attrs,
-                            self.st.lattice.n_nodes, self.st.lattice.n_top_sites)
+        # Each rank writes its own slab: collectively into one file where the output goes through mpio,
+        # else into a part file of its own beside an index.
+        ck.write(self.ranks.comm, self.ckpt_out, self.sim.checkpoint_slab(), attrs, self.sim.checkpoint_table(),
+                 collective=self.writer.mode == "mpio")
         self.have_checkpoint = True
 
     def finish(self):

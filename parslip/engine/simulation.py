@@ -292,43 +292,75 @@ class Simulation:
         ev.count[0] = 0
 
     # ----------------------------------------------------------- checkpoints --
-    def checkpoint_parts(self) -> dict:
-        """This rank's share of a checkpoint (``io.checkpoint``), by global id: node and site arrays."""
-        s = self.state
-        lat = self.setup.lattice
-        d0 = np.zeros(s.n_owned, s.dtype)
-        top = s.own_block == TOP
-        d0[top] = s.drive.drive0[s.own_prow[top], s.own_j[top]]
-        fd = np.zeros(s.n_owned, s.dtype)
-        fd[np.searchsorted(s.gid, s.driven_gid)] = s.drive.force
-        parts = {"gid": s.gid, "u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
-                 "drive0": d0, "drive_force": fd}
-        if lat.has_interface:
-            sl = s.owned_sites()
-            parts["site"] = np.arange(sl.stop - sl.start) + s.site0()
-            parts.update(s.owned_bonds())
-        else:
-            parts["site"] = np.zeros(0, np.int64)
-            parts.update({name: np.zeros(0, s.dtype) for name in BONDS.checkpoint})
-        return parts
+    def checkpoint_table(self) -> np.ndarray:
+        """Every rank's checkpoint slab, [ranks, 4]: node range [first, end), site range [first, end)
+        (``io.checkpoint.slab_table``, from the slab bounds every rank holds)."""
+        from ..io.checkpoint import slab_table
+        return slab_table(self.setup.lattice, self.io_placement.bounds)
 
-    def restore(self, arrays: dict, attrs: dict):
+    def slab_ranges(self) -> tuple[tuple[int, int], tuple[int, int]]:
+        """(global node ids [first, end), interface sites [first, end)) this rank owns: a checkpoint's rows
+        it writes and reads."""
+        row = self.checkpoint_table()[self.rank]
+        return (int(row[0]), int(row[1])), (int(row[2]), int(row[3]))
+
+    def checkpoint_slab(self):
+        """This rank's share of a checkpoint (``io.checkpoint.Slab``): its OWNED nodes and sites of the slabs
+        of no drift, in global order, each dataset in its checkpoint dtype (the state's float type bitwise)."""
+        from ..io.checkpoint import Slab
+        s = self.state
+        nodes, sites = self.slab_ranges()
+        # Each array is made once, in place: the slab is the only copy of the state this rank holds.
+        a = {"u": s.owned_u(self.n, s.dtype), "u_prev": s.owned_u(self.n - 1, s.dtype),
+             "drive0": np.zeros(s.n_owned, s.dtype), "drive_force": np.zeros(s.n_owned, s.dtype)}
+        top = s.own_block == TOP
+        a["drive0"][top] = s.drive.drive0[s.own_prow[top], s.own_j[top]]
+        a["drive_force"][np.searchsorted(s.gid, s.driven_gid)] = s.drive.force
+        bonds = s.owned_bonds() if self.setup.lattice.has_interface else \
+            {name: np.zeros(0, s.dtype) for name in BONDS.checkpoint}
+        if self._followed():
+            # The slabs followed the drift: the state goes to the slabs of no drift, the checkpoint's slabs.
+            got = self._to_io(a, bonds)
+            a, bonds = got["nodes"][2], got["sites"][2]
+        assert len(a["u"]) == nodes[1] - nodes[0]
+        for name, row in bonds.items():
+            a[name] = row.astype(BONDS.dtypes[name] or s.dtype, copy=False)
+        return Slab(nodes, sites, a)
+
+    def _followed(self) -> bool:
+        """The slabs followed the drift away from those of no drift, which the files are written in."""
+        here = follow.placement(self.layout)
+        return self.size > 1 and not (np.array_equal(here.bounds, self.io_placement.bounds) and
+                                      tuple(here.offsets) == tuple(self.io_placement.offsets))
+
+    def _to_io(self, nodes: dict, sites: dict) -> dict:
+        """Collective: columns by OWNED node (``nodes``) and by OWNED site (``sites``) sent to the ranks that
+        hold them in the slabs of no drift (``parallel.migrate``), in global order there."""
+        s = self.state
+        n = self.state.owned_sites()
+        site = np.arange(n.stop - n.start, dtype=np.int64) + (s.site0() if self.setup.lattice.has_interface else 0)
+        return redistribute(self.comm, self.setup.lattice, follow.placement(self.layout), self.io_placement,
+                            {"nodes": (NODES, s.gid, nodes), "sites": (SITES, site, sites)})
+
+    def restore(self, slab, attrs: dict):
         """Continue from a checkpoint: the state at its step, the output cursor after what it wrote.
 
-        Every rank takes its OWNED part by global id, then halo exchanges fill the HALO copies."""
+        ``slab`` holds this rank's OWNED nodes and sites (``io.checkpoint.read`` of ``slab_ranges``);
+        the halo exchange then fills the HALO copies (collective)."""
         self._phase("restore")
-        self.n = n = int(attrs["step"])
-        follow.resume(self, attrs)
         s, st = self.state, self.setup
-        for level, name in ((n, "u"), (n - 1, "u_prev")):
-            s.set_owned_u(level, arrays[name][s.gid])
+        if (tuple(slab.nodes), tuple(slab.sites)) != self.slab_ranges():
+            raise ValueError(f"restore: a slab of nodes {slab.nodes}, sites {slab.sites}; this rank owns "
+                             f"{self.slab_ranges()}")
+        self.n = n = int(attrs["step"])
+        a = slab.arrays
+        s.set_owned_u(n, a["u"])
+        s.set_owned_u(n - 1, a["u_prev"])
         top = s.own_block == TOP
-        s.drive.drive0[s.own_prow[top], s.own_j[top]] = arrays["drive0"][s.gid[top]]
-        s.drive.force[:] = arrays["drive_force"][s.driven_gid]
+        s.drive.drive0[s.own_prow[top], s.own_j[top]] = a["drive0"][top]
+        s.drive.force[:] = a["drive_force"][s.driven_gid - slab.nodes[0]]
         if st.lattice.has_interface:
-            sl = s.owned_sites()
-            sites = np.arange(sl.stop - sl.start) + s.site0()
-            s.set_owned_bonds({name: arrays[name][sites] for name in BONDS.checkpoint})
+            s.set_owned_bonds({name: a[name] for name in BONDS.checkpoint})
         self.refill_halos()
         if self.rank == 0:
             s.iface.counters[:] = [int(v) for v in attrs["counters"]]
@@ -345,11 +377,13 @@ class Simulation:
         self._snap = {k: snaps + m for m, k in enumerate(later)}
         self.snapshots_total = snaps + len(later)
         self.snapshots_written = snaps
-        self._energy_restore(attrs)
+        self._energy_restore(attrs, a["u_prev"][s.driven_gid - slab.nodes[0]])
+        follow.resume(self, attrs)          # the restored slabs of no drift follow the checkpoint's drift
 
     def refill_halos(self):
-        """Collective: every HALO copy takes its owner's u(n), u(n - 1) and bond state, as after a step (both
-        levels: a rule may read u(n - 1) of HALO sites too, the slip velocity)."""
+        """Fill every HALO copy from the rank that owns it, at both Verlet levels u(n) and u(n - 1) (a rule
+        may read u(n - 1) of HALO sites: the slip velocity), with the bond rows that travel; collective.
+        After a restore, which sets OWNED values only."""
         if self.comm is None:
             return
         from ..parallel.halo_mpi import mpi_complete, mpi_post
@@ -421,9 +455,10 @@ class Simulation:
         return {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
                 "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in quanta], np.int64)}
 
-    def _energy_restore(self, attrs: dict):
-        """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)."""
-        b, s = self.budget, self.state
+    def _energy_restore(self, attrs: dict, driven_u_prev: np.ndarray):
+        """Continue the budget from a checkpoint: rank 0 carries the totals, every rank its slots' u(n-1)
+        (``driven_u_prev``: [slots, 2], the driven nodes' rows of the checkpoint)."""
+        b = self.budget
         tot = attrs.get("energy_totals")
         b.base[:] = 0.0
         b.acc[:] = 0
@@ -435,8 +470,7 @@ class Simulation:
             base = attrs.get("energy_base")
             known = base is not None and not np.isnan(base).all()
             self.energy_base = self._later_terms(np.asarray(base)[None], len(bg.STATE))[0] if known else None
-        u_prev = s.owned_u(self.n - 1)
-        b.prev[:] = u_prev[np.searchsorted(s.gid, s.driven_gid)].T
+        b.prev[:] = driven_u_prev.T
 
     def _later_terms(self, values, n: int) -> np.ndarray:
         """A checkpoint's budget terms ([rows, terms]) padded to ``n`` terms: a checkpoint written before the
@@ -471,15 +505,8 @@ class Simulation:
         pos, vel, sig = self.state.node_fields(self.n)
         partner = self.state.owned_partner()
         far = self._far_ends(pos, partner)                # read where the state is, before any move
-        here = follow.placement(self.layout)
-        if self.size > 1 and not (np.array_equal(here.bounds, self.io_placement.bounds) and
-                                  tuple(here.offsets) == tuple(self.io_placement.offsets)):
-            # The slabs followed the drift: the node fields go to the slabs the file is written in.
-            s = self.state
-            site = np.arange(len(partner), dtype=np.int64) + (s.site0() if self.setup.lattice.has_interface else 0)
-            got = redistribute(self.comm, self.setup.lattice, here, self.io_placement,
-                               {"nodes": (NODES, s.gid, {"pos": pos, "vel": vel, "sig": sig}),
-                                "sites": (SITES, site, {"partner": partner, "far": far})})
+        if self._followed():
+            got = self._to_io({"pos": pos, "vel": vel, "sig": sig}, {"partner": partner, "far": far})
             cols, sites = got["nodes"][2], got["sites"][2]
             pos, vel, sig, partner, far = cols["pos"], cols["vel"], cols["sig"], sites["partner"], sites["far"]
         writer.snapshot(j, t, pos, vel, sig, partner, far)

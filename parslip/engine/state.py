@@ -15,7 +15,7 @@ import numpy as np
 from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
-from ..model.interface import BONDS, KX, KY, PARTNER, X0
+from ..model.interface import BOND_TABLE, BONDS, KX, KY, PARTNER, X0
 from .kernels import interface as ik
 from .loop import Drive, Levels
 
@@ -84,8 +84,11 @@ class State:
         # Interface ------------------------------------------------------------
         wt, wb = tl.width, bl.width
         # The per-site bond state (``model.interface.BOND_TABLE``): every stored site starts bonded to the
-        # substrate site facing it, with x0 = 0.
+        # substrate site facing it, each other row at its ``initial`` value (x0 = 0).
         bonds = np.zeros((len(BONDS.names), wt), dt)
+        for i, row in enumerate(BOND_TABLE):
+            if row.initial is not None:
+                bonds[i] = row.initial
         bonds[PARTNER] = -1
         reach = layout.reach
         law = setup.law

@@ -105,14 +105,17 @@ HEAL_SPEED, HEAL_TIME = 1, 2
 #   checkpoint   the dtype a checkpoint stores it in ("int64"; None: the state's float type), or False
 #   output       "frame": written per interface frame (/interface/<name>, by ``kernels.interface.record``);
 #                "site": written once per site (/interface/<name>, from ``site_values``); None: not written
-BondRow = namedtuple("BondRow", "name travels checkpoint output units meaning")
+#   initial      the value every site starts with, in the row's units; a checkpoint that lacks the row (one
+#                written before the row existed) restarts with it.  None: set by the state from the scene
+#                (the facing substrate column; the site's own constants), and every checkpoint holds it.
+BondRow = namedtuple("BondRow", "name travels checkpoint output units meaning initial", defaults=(None,))
 BOND_TABLE = (
     BondRow("partner", True, "int64", "frame", "-", "the substrate column bonded to (-1 broken)"),
-    BondRow("x0", True, None, None, "a", "the bond's rest offset"),
+    BondRow("x0", True, None, None, "a", "the bond's rest offset", 0.0),
     BondRow("cand", True, "int64", None, "-", "HEAL_TIME: the bottom site the free site has claimed "
-                                              "(substrate column), while clock > 0"),
+                                              "(substrate column), while clock > 0", 0),
     BondRow("clock", True, "int64", None, "steps", "HEAL_TIME: consecutive steps it has claimed cand "
-                                                   "(0: none; at most n_heal + 1)"),
+                                                   "(0: none; at most n_heal + 1)", 0),
     BondRow("kx", False, None, "site", "m c^2/a^2", "the bond's shear stiffness"),
     BondRow("ky", False, None, "site", "m c^2/a^2", "the bond's normal stiffness"),
     BondRow("delta_b", False, None, "site", "a", "the bond's breaking length"),

@@ -411,10 +411,8 @@ def _finish_record(rec: dict, out: str) -> None:
         rec["commit"] = run.attrs.get("git_commit", rec["commit"])
         if rec["status"] == "ok":
             rec["observables"] = run.observables()
-            from ..io.checkpoint import path_for
-            ck = path_for(out)
-            if os.path.exists(ck):
-                os.remove(ck)         # the end-of-run checkpoint of a finished point: only disk now
+            from ..io.checkpoint import path_for, remove
+            remove(path_for(out))     # the end-of-run checkpoint of a finished point (and its parts): only disk now
     except (ConfigError, OSError, KeyError, ValueError) as e:
         if rec["status"] == "ok":
             rec["status"] = f"failed: its output cannot be read ({_error_line(e)})"
