@@ -66,5 +66,12 @@ def _scaling(args) -> int:
                           log=lambda m: print(m, file=sys.stderr, flush=True))
     cores = os.cpu_count() or 1
     scaling.report(pts, ("N", "H", "1"), [r for r in ranks if r > cores], ["2000:64"], "shear", scaling.Cluster())
+    from ..io.cache import store_coefficients
+    from ..studies.bench import model_check
+    coef = model_check.measured(pts, log=lambda m: print(m, file=sys.stderr, flush=True))
+    print("\nThe travel model (parslip info) against the measured steps, with this host's coefficients:\n")
+    print(model_check.table(model_check.check(pts, coef, cores=cores)))
+    if coef.source != "defaults":
+        print(f"(coefficients kept for parslip info: {store_coefficients(coef.__dict__)})")
     print(f"\n(written to {args.json})")
     return 0

@@ -14,12 +14,14 @@ snapshot needs while it is written, and the process itself:
 - snapshot transient: the node fields of a snapshot (u(n), u(n-1), positions,
   velocities, stresses: 104 B per node, plus 48 B of temporaries) on every
   rank; on a rank that writes through serial h5py (one rank, or rank 0 of
-  the gathering writer, which also receives every other rank's fields) a
-  fixed 30 MiB and 250 B per node it writes instead, measured at l = 100,
-  500 and 1000 on 1 and 2 ranks with 30 snapshots (the peak grows over the
-  first few snapshots and then stays: HDF5's per-dataset chunk caches and
-  freed buffers the allocator keeps); under the collective writer each rank
-  writes its own nodes and stays near the 152 B per node;
+  the gathering writer) a fixed 30 MiB and 250 B per node of its own
+  instead, measured at l = 100, 500 and 1000 on 1 and 2 ranks with 30
+  snapshots (the peak grows over the first few snapshots and then stays:
+  HDF5's per-dataset chunk caches and freed buffers the allocator keeps),
+  plus two of the messages in which the other ranks stream their fields to
+  it (``io.output.STREAM_BYTES`` each: the one it writes and the next); under
+  the collective writer each rank writes its own nodes and stays near the
+  152 B per node;
 - set-up transient: sorting the owned nodes into global order and building
   the writer's bond cells (a few hundred columns at a time): about 100 B
   per node, measured;
@@ -32,6 +34,8 @@ snapshot needs while it is written, and the process itself:
 from __future__ import annotations
 
 import numpy as np
+
+from ..io.output import STREAM_BYTES
 
 BASE = 200 << 20
 INDEX_BYTES = 64
@@ -103,8 +107,8 @@ def per_rank_bytes(setup, ranks: int, gather: bool = True, counts=None, bounds=N
     events = np.where(sites > 0, limit + 2 * sites * CHECK_EVERY, 0) * EVENT_BYTES
     persistent = state + owned * (INDEX_BYTES + CELL_BYTES) + frames + events
     transient = owned * SNAPSHOT_BYTES if snapshots else np.zeros(ranks, np.int64)
-    if snapshots and (gather or ranks == 1):            # serial h5py writes every node on rank 0
-        transient[0] = WRITER_FIXED + lat.n_nodes * WRITER_BYTES
+    if snapshots and (gather or ranks == 1):            # serial h5py: rank 0 writes, the others stream to it
+        transient[0] = WRITER_FIXED + owned[0] * WRITER_BYTES + (2 * STREAM_BYTES if ranks > 1 else 0)
     omega = np.zeros(ranks, np.int64)
     if 2 * lat.n_nodes <= LANCZOS_MAX_DOFS:
         omega[0] = lat.n_nodes * OMEGA_BYTES

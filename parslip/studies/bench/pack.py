@@ -20,6 +20,7 @@ import time
 import numpy as np
 from numba import njit
 
+from ...model.interface import BONDS
 from ...parallel.halo_mpi import mpi_complete, mpi_post
 
 
@@ -33,7 +34,7 @@ def measure(setup, ranks: int, rank: int, seconds: float = 1.0) -> dict:
     rng = np.random.default_rng(0)
     bx, by = rng.standard_normal(bl.shape), rng.standard_normal(bl.shape)
     tx, ty = rng.standard_normal(tl.shape), rng.standard_normal(tl.shape)
-    bonds = rng.standard_normal((7, tl.width))
+    bonds = rng.standard_normal((len(BONDS.names), tl.width))
     sent, received = int(plan.sbuf.shape[0]), int(plan.rbuf.shape[0])
     out = {"ranks": ranks, "rank": rank, "peers": int(plan.peer.shape[0]), "values_sent": sent,
            "values_received": received}
@@ -73,7 +74,7 @@ def exchange(setup, comm, seconds: float = 1.0) -> dict:
     plan = plan_of(lay, np.float64, comm)
     bl, tl = lay.blocks
     bx, by, tx, ty = (np.zeros(b.shape) for b in (bl, bl, tl, tl))
-    bonds = np.zeros((7, tl.width))
+    bonds = np.zeros((len(BONDS.names), tl.width))
     _exchanges(plan, bx, by, tx, ty, bonds, 10)
     reps, times = 200, []
     t_end = time.perf_counter() + seconds
@@ -100,7 +101,8 @@ def _mpi_lor():
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m parslip.studies.bench.pack", description=__doc__.split("\n\n")[0])
-    p.add_argument("scene", help="scene file")
+    p.add_argument("scene", help="scene file, or a contact length l for the paper's geometry scaled (bench.case)")
+    p.add_argument("--mode", default="shear", help="drive mode when SCENE is a contact length")
     p.add_argument("--ranks", type=int, default=2)
     p.add_argument("--rank", type=int, default=None, help="which rank (default: the middle one)")
     p.add_argument("--seconds", type=float, default=1.0)
@@ -109,7 +111,11 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     from ...scene.derive import derive
     from ...scene.load import load
-    st = derive(load(a.scene, a.set))
+    if a.scene.isdigit():
+        from .case import scene_at
+        st = derive(scene_at(int(a.scene), a.mode, "float64", [tuple(v.split("=", 1)) for v in a.set]))
+    else:
+        st = derive(load(a.scene, a.set))
     if a.exchange:
         from mpi4py import MPI
         res = MPI.COMM_WORLD.gather(exchange(st, MPI.COMM_WORLD, a.seconds))

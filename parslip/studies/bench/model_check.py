@@ -1,0 +1,105 @@
+"""The travel model's coefficients measured on this host, and the model checked against the steps it times.
+
+`parslip bench --scaling` times ``bench.case`` at several contact lengths on 1, 2 and 3 ranks
+(``scaling.measure``).  From those points and two micro-benchmarks this module takes the coefficients the
+travel model charges (``scaling.Coefficients``):
+
+    node_ns            the 1-rank step time over the nodes, at the largest contact length measured
+                       (its site share, S / N < 1 %, is left in: it is what a node update costs there)
+    pack_ns_per_value  ``bench.pack.measure``: packing and unpacking one halo value, no MPI
+    latency_us         ``bench.pack.exchange`` on 2 ranks: the exchange of a step less its packing, per
+                       pair of messages (a message sent and one received)
+
+and sets each measured point beside the model's step for the same decomposition (``scaling.step_model``
+on the case's counts, no drift: a case runs seconds).  A rank count above the cores shares them: the
+prediction is then multiplied by ranks / cores.  The coefficients are kept for `parslip info`
+(``io.cache.store_coefficients``).
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import time
+
+import numpy as np
+
+from .scaling import Coefficients, coefficients, step_model
+
+
+def _case_setup(l: int, mode: str):
+    from ...scene.derive import derive
+    from .case import scene_at
+    return derive(scene_at(l, mode, "float64"))
+
+
+def _counts(setup, ranks: int):
+    from ...parallel.counts import rank_counts
+    from ...parallel.layout import column_cost, partition
+    lat = setup.lattice
+    return rank_counts(lat, partition(column_cost(lat, 0), ranks), setup.reach, (0, 0))
+
+
+def exchange_latency(l: int, mode: str = "shear", seconds: float = 1.0, timeout: float = 300.0) -> dict | None:
+    """``bench.pack --exchange`` on 2 ranks at contact length ``l``: rank 0's figures (us per exchange, its
+    packing, us per message), or None if it did not finish."""
+    from ...parallel.launcher import python_command
+    cmd = python_command("parslip.studies.bench.pack", str(l), "--mode", mode, "--exchange", "--seconds", seconds,
+                         ranks=2)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None
+    if p.returncode != 0:
+        return None
+    return json.loads(p.stdout.strip().splitlines()[-1])["ranks"][0]
+
+
+def measured(pts, mode: str = "shear", log=print) -> Coefficients:
+    """The coefficients of this host (module docstring) from the 1-rank points ``pts`` and the
+    micro-benchmarks; what could not be measured keeps its value from ``scaling.coefficients``."""
+    from .pack import measure as pack_measure
+    base = coefficients()
+    one = [q for q in pts if q["ranks"] == 1 and q["us_per_step"]]
+    if not one:
+        return base
+    big = max(one, key=lambda q: q["l"])
+    st = _case_setup(big["l"], mode)
+    node_ns = big["us_per_step"] * 1e3 / st.lattice.n_nodes
+    pack = pack_measure(st, 2, 0, 0.5)["ns_per_value"]
+    ex = exchange_latency(big["l"], mode)
+    latency = base.latency_us if ex is None else max(2.0 * ex["us_per_message"], 0.0)
+    src = f"parslip bench --scaling, {time.strftime('%Y-%m-%d')}, l = {big['l']}"
+    log(f"coefficients: node {node_ns:.3f} ns, packing {pack:.2f} ns per value, latency {latency:.2f} us "
+        f"({'measured' if ex else 'assumed'})")
+    return Coefficients(node_ns=node_ns, site_ns=base.site_ns * node_ns / base.node_ns, fixed_us=base.fixed_us,
+                        pack_ns_per_value=pack, latency_us=latency, bandwidth_gbs=base.bandwidth_gbs,
+                        overlap=base.overlap, source=src)
+
+
+def check(pts, coef: Coefficients, mode: str = "shear", cores: int | None = None) -> list[dict]:
+    """Each timed point beside the travel model's step for its decomposition: l, ranks, measured and
+    predicted us per step, their ratio (ranks above ``cores`` share them: prediction x ranks / cores)."""
+    cores = cores or os.cpu_count() or 1
+    rows = []
+    for q in pts:
+        if not q["us_per_step"]:
+            continue
+        st = _case_setup(q["l"], mode)
+        step = float(step_model(_counts(st, q["ranks"]), coef)["step"].max())
+        step *= max(q["ranks"] / cores, 1.0)
+        rows.append({"l": q["l"], "ranks": q["ranks"], "measured_us": q["us_per_step"], "predicted_us": step,
+                     "ratio": step / q["us_per_step"]})
+    return rows
+
+
+def table(rows) -> str:
+    """The check as a markdown table, and the largest deviation."""
+    lines = ["| l | ranks | measured us/step | predicted | predicted / measured |", "| --- | --- | --- | --- | --- |"]
+    lines += [f"| {r['l']} | {r['ranks']} | {r['measured_us']:.1f} | {r['predicted_us']:.1f} | {r['ratio']:.2f} |"
+              for r in rows]
+    if rows:
+        worst = max(rows, key=lambda r: abs(np.log(r["ratio"])))
+        lines.append(f"\nlargest deviation: {100 * (worst['ratio'] - 1):+.0f} % (l = {worst['l']}, "
+                     f"{worst['ranks']} ranks)")
+    return "\n".join(lines)
