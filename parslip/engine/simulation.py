@@ -243,9 +243,9 @@ class Simulation:
         m = int(ev.count[0])
         if writer is not None:
             nds = self.setup.n_drive_start
-            self.events_written = writer.interface_events(
-                self.events_written, ev.step[:m] - nds, ev.site[:m], ev.kind[:m], ev.partner[:m], ev.energy[:m],
-                ev.traction[:m], self.drive_time)
+            fields = {name: getattr(ev, name)[:m] for name in ev._fields if name != "count"}
+            fields["step"] = fields["step"] - nds
+            self.events_written = writer.interface_events(self.events_written, fields, self.drive_time)
         ev.count[0] = 0
 
     # ----------------------------------------------------------- checkpoints --

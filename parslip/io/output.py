@@ -509,20 +509,20 @@ class Output:
             self._held = True
             hooks.hold(f"{self.path}.held")
 
-    def interface_events(self, k0: int, steps, sites, kinds, partners, energies, tractions, time_of) -> int:
-        """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``, the
-        bonds' stored ``energies`` and shear ``tractions``) at index ``k0`` of /interface/events, in the
-        contract's order: by step, then site, then kind.  Collective, also for a rank with none;
-        ``time_of(steps)`` gives their times (l/c_r).  Returns the events in the file, the same on every rank."""
-        mine = (np.asarray(steps, np.int64), np.asarray(sites, np.int32), np.asarray(kinds, np.uint8),
-                np.asarray(partners, np.int32), np.asarray(energies, np.float64), np.asarray(tractions, np.float64))
+    def interface_events(self, k0: int, fields: dict, time_of) -> int:
+        """Append every rank's bond events at index k0 of /interface/events, in the contract's order: by step,
+        then site, then kind.  ``fields`` holds one array per event dataset of the contract but ``time``
+        (``EVENT_DATASETS``: the drive steps, global sites, kinds, partners, the bonds' stored energies, ...),
+        all of one length.  Collective, also for a rank with none; ``time_of(steps)`` gives their times
+        (l/c_r).  Returns the events in the file, the same on every rank."""
+        names = [name for name in EVENT_DATASETS if name != "time"]
+        mine = tuple(np.asarray(fields[name], EVENT_DATASETS[name][0]) for name in names)
         parts = [mine] if self.size == 1 else self.comm.gather(mine, root=0)
         total = None
         if self.root:
-            step, site, kind, partner, energy, traction = (np.concatenate(col) for col in zip(*parts))
-            order = np.lexsort((kind, site, step))
-            data = {"step": step[order], "site": site[order], "kind": kind[order], "partner": partner[order],
-                    "energy": energy[order], "traction": traction[order]}
+            cols = dict(zip(names, (np.concatenate(col) for col in zip(*parts))))
+            order = np.lexsort((cols["kind"], cols["site"], cols["step"]))
+            data = {name: col[order] for name, col in cols.items()}
             data["time"] = np.asarray(time_of(data["step"]), np.float64)
             total = k0 + len(order)
         if self.size > 1:
