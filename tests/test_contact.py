@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from helpers import datasets, run_cli, simulation, SMALL
+from parslip.engine.kernels import budget as bg
 from parslip.engine.kernels import interface as ik
 from parslip.model.interface import PARTNER
 from parslip.parallel.layout import PAD
@@ -16,6 +17,11 @@ from parslip.parallel.layout import PAD
 # SMALL under F_N = 2, sheared (T0); a broken bond waits 5 l/c_r to re-form, longer than the run.
 SINKING = {**SMALL, "load.FN": 2.0, "drive.mode": "shear", "drive.duration": 8.0, "output.snapshots": 0,
            "interface.heal_time": 5.0}
+
+
+def _site_totals(row):
+    """Scratch running totals per site (``loop.Budget.sites``) for a direct call of ``kernels.interface.update``."""
+    return np.zeros((len(bg.SITE_TERMS), 2, len(row)))
 
 
 def test_the_contact_force_is_the_documented_one_and_conserves_momentum():
@@ -35,8 +41,7 @@ def test_the_contact_force_is_the_documented_one_and_conserves_momentum():
     tx[PAD, j], ty[PAD, j] = 0.3, -0.55                   # slid 0.3 a, sunk below the rest gap
     bx[br, i], by[br, i] = 0.05, 0.1                       # the surface tilted
     bx[br, i + 1], by[br, i + 1] = -0.1, -0.2
-    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], ty[PAD], bx[br], by[br], it, np.zeros((2, len(tx[PAD]))),
-              np.zeros((2, len(tx[PAD]))))
+    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], ty[PAD], bx[br], by[br], it, _site_totals(tx[PAD]))
     d0 = sim.setup.law.delta0
     p0 = np.array([col + bx[br, i], by[br, i]])            # substrate sites at y = 0 (top site at rest: y = delta0)
     p1 = np.array([col + 1 + bx[br, i + 1], by[br, i + 1]])
@@ -53,8 +58,7 @@ def test_the_contact_force_is_the_documented_one_and_conserves_momentum():
     total = np.array([it.ext_x[j] + it.exb_x[i] + it.exb_x[i + 1], it.ext_y[j] + it.exb_y[i] + it.exb_y[i + 1]])
     assert np.all(np.abs(total) < 1e-14)
     ty[PAD, j] = 0.3                                       # lifted clear of the surface: no force
-    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], ty[PAD], bx[br], by[br], it, np.zeros((2, len(tx[PAD]))),
-              np.zeros((2, len(tx[PAD]))))
+    ik.update(0, tx[PAD], ty[PAD], bx[br], by[br], tx[PAD], ty[PAD], bx[br], by[br], it, _site_totals(tx[PAD]))
     assert it.ext_x[j] == 0 and it.ext_y[j] == 0
 
 

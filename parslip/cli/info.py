@@ -84,11 +84,24 @@ def _interface_lines(st) -> list[str]:
             + (f"; {len(law.patches)} patch(es)" if law.patches else "")
             + (f"; random {law.random[0]}: cv {law.random[1]:g}, correlation {law.random[2]:g} a, seed "
                f"{law.random[3]}" if law.random else "")))
+    out += _rupture_lines(st)
     if law.heal:
         out.append(_line("healing", f"re-bond only below a relative slip velocity of {law.heal_speed:g} c_r"
                          * bool(law.heal_speed) + ("; " if law.heal_speed and law.heal_time else "")
                          + f"after claiming the same site for {law.heal_time:g} l/c_r" * bool(law.heal_time)))
     return out
+
+
+def _rupture_lines(st) -> list[str]:
+    """The law's weakening and scales (``analysis.rupture.law_scales``)."""
+    from ..analysis.rupture import law_scales
+    law = st.law
+    k = law_scales(st)
+    return [_line("weakening", f"D_c = {k['D_c']:.4g} a past the peak, secant unloading" if law.soften else
+                  "none: a bond breaks at its peak (interface.softening = 0)"),
+            _line("law scales", f"tau_p = {k['tau_p']:.4g}, tau_r = {k['tau_r']:.4g} rho c_r^2, Gamma = "
+                                f"{k['Gamma']:.4g} m c_r^2/a at rest under F_N: Lambda = 9 pi/16 M Gamma/"
+                                f"(tau_p - tau_r)^2 = {k['Lambda']:.4g} a (M = {k['M']:.4g})")]
 
 
 def _drive_lines(st) -> list[str]:

@@ -74,12 +74,13 @@ Drive = namedtuple("Drive", "drive0 index force")
 Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy step cursor")
 # The energy budget on one rank (``kernels.budget``): acc [N_Q, 2] int64, the exact sums the row kernels
 # make (``kernels.exact``: the damping since the drive started; the kinetic and bulk elastic energy of the
-# last step that ended on a frame); work per driven slot, broken and formed per interface site (local
-# column of the block's interface row), each an array [2, units] of float pairs (hi, lo); base [2, N_TERMS]:
+# last step that ended on a frame); work per driven slot, an array [2, slots] of float pairs (hi, lo); sites
+# [row, 2, site], the running totals per interface site (local column of the block's interface row), one row
+# of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the weakening); base [2, N_TERMS]:
 # what a restart carried over (rank 0); prev [2, slots]: each driven slot's u(n-1) (x, y); scale [N_Q]: each
 # exact sum's quanta per m c^2 (``kernels.exact.scales``); cs: the kernels' factors with them,
 # [zeta/(4 dt) S_damp, -S_damp/(2 C), S_kin/(2 dt^2), -S_el/(2 C)] (``stencil.budget_shares``).
-Budget = namedtuple("Budget", "acc work broken formed base prev cs scale")
+Budget = namedtuple("Budget", "acc work sites base prev cs scale")
 # What the loop reports: flags (this rank's first problem), gflags (their MAX over the ranks), timers
 # (ns per phase), beat (BEAT_STEP: the step the loop last passed, read by the monitor thread).
 Diag = namedtuple("Diag", "flags gflags timers beat")
@@ -372,7 +373,7 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
     if prm.has_iface:
         br = prm.brow
         ik.update(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], nxt.tx[PAD], nxt.ty[PAD], nxt.bx[br],
-                  nxt.by[br], iface, bud.broken, bud.formed)
+                  nxt.by[br], iface, bud.sites)
         if iface.reach[0] >= 0:
             _flag(flags, FLAG_REACH, n, 1, 0, iface.reach[0], 0.0)
             iface.reach[0] = -1
@@ -407,8 +408,9 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
 def _budget_start(cur, old, drive, bud):
     """The budget's totals start with the drive (step n_drive_start): zero (with what a restart before it
     carried over), and each driven slot's u(n-1)."""
-    for acc in (bud.work, bud.broken, bud.formed, bud.base):
+    for acc in (bud.work, bud.base):
         acc[:, :] = 0.0
+    bud.sites[:, :, :] = 0.0
     bud.acc[bg.Q_DAMP, :] = 0
     idx = drive.index
     for r in range(idx.shape[0]):
@@ -420,15 +422,15 @@ def _budget_start(cur, old, drive, bud):
 
 
 @njit(cache=True, _nrt=False)
-def _energies(cur, old, sched, prm, iface, bud, out):
+def _energies(n, cur, old, sched, prm, iface, bud, out):
     """This rank's share of the budget at a frame (``kernels.budget``), out[:, term]: the float pairs in rows
     0-1 (the running totals with what a restart carried over, the interface bonds' staggered energy, the
     load's sum), the kernels' exact sums in rows 2-4 (the damping; the kinetic and bulk elastic energy the
     step that ended here left)."""
     out[:, :] = 0.0
     bg.total(bud.work, out, bg.W_DRIVE)
-    bg.total(bud.broken, out, bg.BROKEN)
-    bg.total(bud.formed, out, bg.FORMED)
+    for k in range(len(bg.SITE_TERMS)):
+        bg.total(bud.sites[k], out, bg.SITE_TERMS[k])
     for k in range(bg.N_TERMS):
         bg.add(out, k, bud.base[0, k])
         bg.add(out, k, bud.base[1, k])
@@ -442,7 +444,7 @@ def _energies(cur, old, sched, prm, iface, bud, out):
             bg.load_sum(cur.ty, old.ty, tk.row, tk.j0, tk.n, out)
     if prm.has_iface:
         br = prm.brow
-        ik.staggered(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
+        ik.staggered(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
                      old.by[br], iface, out)
 
 
@@ -463,12 +465,12 @@ def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
     if slot >= frames.step.shape[0]:
         return False
     if prm.has_iface:
-        ik.record(cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
+        ik.record(n, cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
     # The drive's force in the step that ended here (0 before the drive's first step).
     on = prm.drive != 0 and n > prm.n_drive_start
     for i in range(drive.force.shape[0]):
         frames.fdrive[slot, i] = drive.force[i] if on else 0.0
-    _energies(cur, old, sched, prm, iface, bud, frames.energy[slot])
+    _energies(n, cur, old, sched, prm, iface, bud, frames.energy[slot])
     frames.step[slot] = n
     cursor[C_COUNT] = slot + 1
     cursor[C_LAST] = k

@@ -114,7 +114,7 @@ class Simulation:
         cs = np.array([sd * scale[bg.Q_DAMP], -0.5 * scale[bg.Q_DAMP] / cf, 0.5 * scale[bg.Q_KIN] / (dt * dt),
                        -0.5 * scale[bg.Q_EL] / cf])
         return L.Budget(acc=np.zeros((bg.N_Q, 2), np.int64), work=np.zeros((2, slots)),
-                        broken=np.zeros((2, sites)), formed=np.zeros((2, sites)), base=np.zeros((2, bg.N_TERMS)),
+                        sites=np.zeros((len(bg.SITE_TERMS), 2, sites)), base=np.zeros((2, bg.N_TERMS)),
                         prev=np.zeros((2, slots)), cs=cs, scale=scale)
 
     def step(self):
@@ -339,9 +339,10 @@ class Simulation:
         out = {"work_drive": tot[:, bg.W_DRIVE] * e, "damping": tot[:, bg.DAMPING] * e,
                "broken": tot[:, bg.BROKEN] * e, "formed": tot[:, bg.FORMED] * e,
                "kinetic": (tot[:, bg.KINETIC] - base[0]) * e, "elastic": (tot[:, bg.ELASTIC] - base[1]) * e,
-               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[2]) * e}
+               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[2]) * e,
+               "softening": tot[:, bg.SOFTENED] * e}
         balance = (out["work_drive"] + out["work_normal"] + out["formed"]
-                   - (out["elastic"] + out["kinetic"] + out["broken"]))
+                   - (out["elastic"] + out["kinetic"] + out["broken"] + out["softening"]))
         if self.params.drag or self.setup.damping.zeta == 0:
             out["residual"] = balance - out["damping"]
         else:
@@ -356,7 +357,8 @@ class Simulation:
         (fsum and its exact remainder), and the state's terms at the drive's start."""
         b = self.budget
         mine = np.zeros((2, bg.N_TERMS))
-        for acc, term in ((b.work, bg.W_DRIVE), (b.broken, bg.BROKEN), (b.formed, bg.FORMED)):
+        bg.total(b.work, mine, bg.W_DRIVE)
+        for acc, term in zip(b.sites, bg.SITE_TERMS):
             bg.total(acc, mine, term)
         for k in range(bg.N_TERMS):                 # what an earlier restart carried over, without a rounding
             bg.add(mine, k, b.base[0, k])
@@ -384,13 +386,20 @@ class Simulation:
         b.base[:] = 0.0
         b.acc[:] = 0
         if self.rank == 0:
-            b.base[:] = np.nan if tot is None else np.asarray(tot, np.float64)
+            b.base[:] = np.nan if tot is None else self._later_terms(tot)
             if tot is not None:
                 b.acc[:] = np.asarray(attrs["energy_quanta"], np.int64)
             base = attrs.get("energy_base")
             self.energy_base = None if base is None or not np.all(np.isfinite(base)) else np.asarray(base)
         u_prev = s.owned_u(self.n - 1)
         b.prev[:] = u_prev[np.searchsorted(s.gid, s.driven_gid)].T
+
+    @staticmethod
+    def _later_terms(values) -> np.ndarray:
+        """A checkpoint's running totals ([2, terms]) padded with zeros to ``N_TERMS`` terms: a checkpoint
+        written before a term existed (the weakening's) carries none, and its run had none."""
+        values = np.asarray(values, np.float64)
+        return np.concatenate([values, np.zeros((values.shape[0], bg.N_TERMS - values.shape[1]))], axis=1)
 
     def checkpoint_attrs(self) -> dict:
         """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""

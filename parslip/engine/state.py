@@ -232,7 +232,8 @@ class State:
     def potential_energy(self, n: int, load: float) -> float:
         """Potential energy of the OWNED part at step n, in m c^2 (``load``: the factor on F_N):
         bulk bonds (``kernels.diagnostics.bond_energy``), interface bonds
-        1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 on their top node, and the load's -F . u."""
+        1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 on their top node (at the site's k_x: a weakening
+        bond's secant is not read here), and the load's -F . u."""
         from .kernels.diagnostics import bond_energy
         e = np.zeros(self.n_owned)
         bond_energy(*self.level(n), self.own_block, self.own_prow, self.own_j, self.block_geometry(),

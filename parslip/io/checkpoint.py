@@ -29,7 +29,7 @@ import os
 import numpy as np
 
 from ..errors import ConfigError
-from ..model.interface import BONDS
+from ..model.interface import ADDED_ROWS, BONDS
 
 FORMAT = "parslip checkpoint 3"          # 2: with drive_force; 3: with events_written
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
@@ -37,7 +37,8 @@ SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "outpu
              "interface.slip_reach", "run.watchdog")
 # Keys added to the scene since checkpoints of this format were first written, with the value that gives
 # the behaviour of the code that wrote them: a checkpoint whose scene lacks such a key was written with it.
-IMPLIED = {"interface.contact": 0.0, "time.damping": "absolute", "output.energy": "balance"}
+IMPLIED = {"interface.contact": 0.0, "time.damping": "absolute", "output.energy": "balance",
+           "interface.softening": 0.0}
 # Datasets by global node id, with their columns (0: one value per node), then one per bond row by site.
 NODE_DATASETS = {"u": 2, "u_prev": 2, "drive0": 0, "drive_force": 0}
 DATASETS = tuple(NODE_DATASETS) + BONDS.checkpoint
@@ -96,7 +97,9 @@ def read(path: str) -> tuple[dict, dict]:
     """(arrays, attributes) of a checkpoint that ``validate`` accepted."""
     import h5py
     with h5py.File(path, "r") as f:
-        return {name: f[name][...] for name in DATASETS}, dict(f.attrs)
+        # A bond row added to the table since the checkpoint was written starts at zero (``ADDED_ROWS``).
+        n_sites = f["partner"].shape[0]
+        return {name: f[name][...] if name in f else np.zeros(n_sites) for name in DATASETS}, dict(f.attrs)
 
 
 def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
@@ -126,6 +129,8 @@ def validate(path: str, scene: dict, n_nodes: int, n_sites: int) -> dict:
     want = {name: (n_nodes, cols) if cols else (n_nodes,) for name, cols in NODE_DATASETS.items()}
     want.update({name: (n_sites,) for name in BONDS.checkpoint})
     for name, shape in want.items():
+        if name in ADDED_ROWS and name not in shapes:
+            continue                     # written before the row existed: it starts at zero (``read``)
         if shapes.get(name) != shape:
             raise ConfigError(f"--restart {path!r}: dataset /{name} has shape {shapes.get(name)}, this scene needs "
                               f"{shape}; accepted: a checkpoint of the same lattice")

@@ -437,7 +437,12 @@ class Output:
                     if name in g:
                         g[name].resize(nf, axis=0)
             if ENERGY in f:
-                for name in ENERGY_DATASETS:
+                for name, meaning in ENERGY_DATASETS.items():
+                    if name not in f[ENERGY]:    # a file from before the term existed: NaN for its frames
+                        old = f[ENERGY]["residual"]
+                        ds = f[ENERGY].create_dataset(name, data=np.full(old.shape, np.nan), maxshape=(None,),
+                                                      chunks=old.chunks)
+                        ds.attrs["units"], ds.attrs["meaning"] = "m c_r^2", meaning
                     f[ENERGY][name].resize(nf, axis=0)
             if EVENTS in g:                  # events past the checkpoint's are written again from there
                 for name, (dt_, unit) in EVENT_DATASETS.items():
@@ -446,6 +451,10 @@ class Output:
                                                  maxshape=(None,), chunks=(EVENT_CHUNK,)).attrs["units"] = unit
                     g[EVENTS][name].resize(self.spec.events_written, axis=0)
                 g[EVENTS].attrs["events_written"] = self.spec.events_written
+            for name in SITE_DATASETS:       # a file from before the row existed: the values this run uses
+                if name not in g:
+                    g.create_dataset(name, data=st.law.site_values(self.n_sites)[name]).attrs["units"] = \
+                        INTERFACE_DATASETS[name][2]
             if "VTKHDF" in f:
                 old = self._old_snapshots = f["VTKHDF/NumberOfPoints"].shape[0]
                 for name, shape in self._vtk_shapes(self.spec.snapshots_total).items():

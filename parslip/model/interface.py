@@ -8,6 +8,31 @@ bottom, in a) and x0 its rest offset:
     breaks when             sqrt(x_ij^2 + y_ij^2) >= delta_b                          (a)
     a free site re-bonds    to a free bottom site within ``rebond_length`` (a)
 
+Slip weakening (``softening`` = D_c > 0, a per-site value; 0, the paper: the
+bond breaks at its peak).  With s = x_ij - x0 the shear stretch, the peak is
+the step at which the length test above first holds; from there the bond
+weakens instead of breaking:
+
+    peak      s_p = |s| at the peak; tau_p = k_x s_p (the shear force it held then, m c^2/a)
+    slip      delta = |s| - s_p past the peak, its largest so far delta_m (irreversible)
+    residual  tau_r = mu N, N = max(0, k_y (delta0 - y_ij)) the bond's normal force now (contact
+              friction mu, below); 0 without it; at most tau_p
+    envelope  tau_m = tau_p - (tau_p - tau_r) w,  w = min(1, delta_m / D_c)
+    force     f_x = -k_d s,  k_d = tau_m / (s_p + delta_m)   (the secant to the origin: unloading and
+              reloading below the envelope are elastic with k_d, damage only grows on it)
+    breaks    when w = 1 (the traction has fallen to tau_r), or when its length reaches delta_b + D_c
+              (a bond opening, or loaded the other way: a length the halo still serves)
+
+k_y is untouched while the bond weakens (f_y as above, both in compression and tension), so its
+normal energy is elastic and released at the break, never part of the weakening.  A re-formed bond
+starts undamaged.  In a monotonic shear at a constant gap y (x0 = 0) the bond peaks at x_b =
+sqrt(delta_b^2 - y^2), tau_p = k_x x_b, and its fracture energy (``fracture``)
+
+    Gamma = tau_p x_b / 2 + (tau_p - tau_r) D_c / 2                       (m c^2/a per bond)
+
+is its elastic energy at the peak, which the damage takes, and the weakening's area above the residual;
+at D_c = 0 it is the stored energy at the break, the paper's law.
+
 The rules a scene can choose are codes, each written once as an inlined
 function in ``engine.kernels.interface``:
 
@@ -116,6 +141,13 @@ BOND_TABLE = (
     BondRow("kx", False, None, "site", "m c^2/a^2", "the bond's shear stiffness"),
     BondRow("ky", False, None, "site", "m c^2/a^2", "the bond's normal stiffness"),
     BondRow("delta_b", False, None, "site", "a", "the bond's breaking length"),
+    BondRow("softening", False, None, "site", "a", "the bond's weakening distance D_c past its peak (0: it "
+                                                   "breaks at its peak)"),
+    BondRow("peak", True, None, None, "a", "softening: |x_ij - x0| at the bond's peak, where its weakening "
+                                           "began (0: undamaged)"),
+    BondRow("slipped", True, None, None, "a", "softening: the largest slip past the peak so far, |x_ij - x0| "
+                                              "- peak"),
+    BondRow("spent", True, None, None, "m c^2", "softening: the energy the bond's weakening has taken so far"),
 )
 # What the table implies (``bond_layout``): names (row order), travel (indices of the travelling rows),
 # checkpoint (names a checkpoint holds), dtypes ({name: checkpoint dtype}), frame_output and site_output
@@ -136,8 +168,12 @@ def bond_layout(table) -> BondLayout:
 BONDS = bond_layout(BOND_TABLE)
 BOND_ROWS = BONDS.names
 # The rows the compiled kernels index by name.
-PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B = (BOND_ROWS.index(name) for name in
-                                             ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b"))
+PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B, SOFTENING, PEAK, SLIPPED, SPENT = (
+    BOND_ROWS.index(name) for name in ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b", "softening", "peak",
+                                       "slipped", "spent"))
+# Rows added to the table since checkpoints were first written: a checkpoint without one continues with it
+# at zero (undamaged; a checkpoint's scene without the key that sets it implies the value 0).
+ADDED_ROWS = ("softening", "peak", "slipped", "spent")
 
 # Kinds of a bond event (``/interface/events/kind``): the one place they are numbered.
 BREAK, FORM = 1, 2
@@ -147,11 +183,15 @@ EVENT_KINDS = {BREAK: "break", FORM: "re-formation"}
 #   delta0 (a), rebond_length (a), reform, rebond and heal: the rules' codes; heal_du = heal_speed dt (a):
 #   the largest relative x-displacement per step at which a site re-bonds; n_heal = ceil(heal_time/dt).
 #   contact (m c^2/a^2): the stiffness of the unbonded sites' contact with the substrate (0: none).
-Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact")
+#   soften: SOFTEN when some bond weakens (a site's D_c > 0), else 0 (the paper's break); mu: the contact's
+#   friction coefficient, which sets the weakening's residual; tiny: the smallest positive normal number of
+#   the float type (the peak of a bond that peaks with no shear stretch).
+Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact soften mu tiny")
+SOFTEN = 1
 
 
-PATCH_KEYS = ("kx", "ky", "delta_b")
-RANDOM_KEYS = ("kx", "ky", "delta_b")
+PATCH_KEYS = ("kx", "ky", "delta_b", "softening")
+RANDOM_KEYS = ("kx", "ky", "delta_b", "softening")
 
 
 def check_patches(patches, delta0: float) -> None:
@@ -177,7 +217,8 @@ def check_patches(patches, delta0: float) -> None:
             why = "reversed or empty" if x[0] >= x[1] else "outside the contact [0, 1]"
             raise ConfigError(f"{where}.x = {x!r}: {why}; accepted: [from, to] in l, 0 <= from < to <= 1")
         for key, ok, acc in (("kx", lambda v: v >= 0, ">= 0"), ("ky", lambda v: v > 0, "> 0"),
-                             ("delta_b", lambda v: v > delta0, f"> delta0 = {delta0!r}")):
+                             ("delta_b", lambda v: v > delta0, f"> delta0 = {delta0!r}"),
+                             ("softening", lambda v: v >= 0, ">= 0 (in a)")):
             if key in p:
                 v = p[key]
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(v) or v != v:
@@ -220,6 +261,11 @@ def random_field(n: int, cv: float, correlation: float, seed: int) -> np.ndarray
     return np.array([math.exp(x) for x in (math.sqrt(s2) * g - 0.5 * s2).tolist()])
 
 
+def site_x(n_sites: int) -> np.ndarray:
+    """Where each of the n_sites interface sites stands along the contact (l): site s at (s + 1/2)/N."""
+    return (np.arange(n_sites) + 0.5) / max(n_sites, 1)
+
+
 @dataclass(frozen=True)
 class InterfaceLaw:
     """The adhesive bonds of one scene (see the module docstring); lengths in a, stiffnesses in m c^2/a^2."""
@@ -235,6 +281,8 @@ class InterfaceLaw:
     patches: tuple = ()          # ((from, to), {"kx"|"ky"|"delta_b": value}) in order
     random: tuple = ()           # (key, cv, correlation in a, seed), or () for none
     contact: float = 0.0         # m c^2/a^2: an unbonded site's contact stiffness (0: none, the paper)
+    softening: float = 0.0       # a: D_c, the weakening distance past the peak (0: the paper's break)
+    friction: float = 0.0        # mu, the contact's friction coefficient (0: none)
 
     @classmethod
     def from_scene(cls, scene: dict) -> "InterfaceLaw":
@@ -250,7 +298,7 @@ class InterfaceLaw:
                    random=((scene["interface.random.key"], float(scene["interface.random.cv"]),
                             float(scene["interface.random.correlation"]), int(scene["interface.random.seed"]))
                            if scene["interface.random.cv"] > 0 else ()),
-                   contact=float(scene["interface.contact"]))
+                   contact=float(scene["interface.contact"]), softening=float(scene["interface.softening"]))
 
     @property
     def uniform(self) -> bool:
@@ -262,13 +310,20 @@ class InterfaceLaw:
         """The healing rule's bits (HEAL_SPEED, HEAL_TIME); 0 re-bonds at once."""
         return (HEAL_SPEED if self.heal_speed > 0 else 0) | (HEAL_TIME if self.heal_time > 0 else 0)
 
+    @property
+    def soften(self) -> int:
+        """SOFTEN when some bond may weaken (a site's D_c > 0), else 0 (the paper's break)."""
+        return SOFTEN if self.softening > 0 or any(
+            dict(values).get("softening", 0) > 0 for _, values in self.patches) else 0
+
     def rules(self, dtype, setup) -> Rules:
         """The scalars the compiled update reads, lengths in the float type ``dtype``; ``setup`` gives the
         time step (a/c), the velocity unit c_r and the time unit l/c_r (``scene.derive.Setup``)."""
         f = np.dtype(dtype).type
         return Rules(delta0=f(self.delta0), rebond_length=f(self.rebond_length), reform=self.reform,
                      rebond=self.rebond, heal=self.heal, heal_du=f(self.heal_speed * setup.material.c_r * setup.dt),
-                     n_heal=self.heal_steps(setup), contact=f(self.contact))
+                     n_heal=self.heal_steps(setup), contact=f(self.contact), soften=self.soften,
+                     mu=f(self.friction), tiny=f(np.finfo(np.dtype(dtype)).tiny))
 
     def heal_steps(self, setup) -> int:
         """n_heal = ceil(heal_time / dt): the steps a claim must last before the site re-bonds (HEAL_TIME);
@@ -281,7 +336,7 @@ class InterfaceLaw:
         """Each site's own constants {"kx", "ky", "delta_b"}: arrays over the global sites 0..n_sites-1, the
         same on every rank (the module docstring says how they are made)."""
         out = {"kx": np.full(n_sites, self.kx), "ky": np.full(n_sites, self.ky),
-               "delta_b": np.full(n_sites, self.delta_b)}
+               "delta_b": np.full(n_sites, self.delta_b), "softening": np.full(n_sites, self.softening)}
         if self.random:
             key, cv, corr, seed = self.random
             if key == "delta_b":
@@ -289,7 +344,7 @@ class InterfaceLaw:
                 out[key] = self.delta0 + excess * random_field(n_sites, cv * self.delta_b / excess, corr, seed)
             else:
                 out[key] = out[key] * random_field(n_sites, cv, corr, seed)
-        x = (np.arange(n_sites) + 0.5) / max(n_sites, 1)
+        x = site_x(n_sites)
         for (lo, hi), values in self.patches:
             inside = (x >= lo) & (x < hi)
             for key, v in values:
@@ -297,7 +352,7 @@ class InterfaceLaw:
         return out
 
     def extremes(self, n_sites: int) -> dict:
-        """{key: (min, max)} of the sites' kx, ky, delta_b."""
+        """{key: (min, max)} of the sites' kx, ky, delta_b, softening."""
         return {k: (float(v.min()), float(v.max())) for k, v in self.site_values(n_sites).items() if len(v)}
 
     def largest(self, n_sites: int) -> dict:
@@ -305,8 +360,31 @@ class InterfaceLaw:
         omega_max (a stiffer spring anywhere raises every eigenvalue of the stiffness or leaves it), the
         longest delta_b the halo's reach."""
         if self.uniform or n_sites == 0:
-            return {"kx": self.kx, "ky": self.ky, "delta_b": self.delta_b}
+            return {"kx": self.kx, "ky": self.ky, "delta_b": self.delta_b, "softening": self.softening}
         return {k: float(v.max()) for k, v in self.site_values(n_sites).items()}
+
+    def longest_bond(self, n_sites: int) -> float:
+        """The longest a bond gets before it breaks (a), the largest over the sites of delta_b + D_c (a weakening
+        bond breaks at that length at the latest): what the halo's reach must serve."""
+        if self.uniform or n_sites == 0:
+            return self.delta_b + self.softening
+        v = self.site_values(n_sites)
+        return float((v["delta_b"] + v["softening"]).max())
+
+    def strength(self, n_sites: int, fn: float) -> dict:
+        """Each site's law at rest under the total normal load ``fn`` (m c^2/a) shared evenly by the n_sites bonds
+        (arrays over the global sites; module docstring): "gap" y = delta0 - (F_N/N)/k_y (a), "x_b" the shear
+        stretch of its peak sqrt(delta_b^2 - y^2) (a, x0 = 0), "tau_p" = k_x x_b and "tau_r" = min(mu F_N/N,
+        tau_p) (m c^2/a: forces per bond, a traction times a), "D_c" (a), and "Gamma" = tau_p x_b/2 + (tau_p -
+        tau_r) D_c/2 (m c^2/a: energy per bond over its spacing a)."""
+        v = self.site_values(n_sites)
+        normal = fn / max(n_sites, 1)
+        gap = self.delta0 - normal / v["ky"]
+        xb = np.sqrt(np.maximum(v["delta_b"] ** 2 - gap ** 2, 0.0))
+        tp = v["kx"] * xb
+        tr = np.minimum(self.friction * normal, tp)
+        return {"gap": gap, "x_b": xb, "tau_p": tp, "tau_r": tr, "D_c": v["softening"],
+                "Gamma": 0.5 * tp * xb + 0.5 * (tp - tr) * v["softening"]}
 
     def closing_load(self, sites: int) -> float:
         """N k_y delta0 (m c^2/a): the total normal load that closes the mean gap of ``sites`` bonds at rest."""
@@ -326,6 +404,8 @@ class InterfaceLaw:
             out.append("interface.patch or interface.random")
         if self.contact:
             out.append(f"interface.contact = {self.contact!r}")
+        if self.soften:
+            out.append("interface.softening")
         return out
 
     def normal_stiffness(self, ky: float) -> float:

@@ -106,7 +106,8 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     law = InterfaceLaw.from_scene(scene)
     drive = Drive.from_scene(scene)
-    big = law.largest(lat.n_top_sites if lat.has_interface else 0)
+    n_sites = lat.n_top_sites if lat.has_interface else 0
+    big = law.largest(n_sites)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
                                          big["kx"], law.normal_stiffness(big["ky"]), **drive.stability_key())
@@ -132,7 +133,7 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,
                n_drive=n_drive, frame_every=frame_every, snapshot_steps=snaps, v0=drive.speed(mat.c_r),
-               slip_reach=reach, reach=interface_reach(law.rebond_length, big["delta_b"], reach),
+               slip_reach=reach, reach=interface_reach(law.rebond_length, law.longest_bond(n_sites), reach),
                precision=scene["time.precision"], law=law, drive=drive, damping=damping)
     limits.check_setup(st)
     return st

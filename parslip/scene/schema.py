@@ -86,16 +86,18 @@ SCHEMA: dict[str, Key] = {
     "interface.rebond_within": Key(0.0, float, "a", ">= 0 (0 = auto: delta0, the paper's delta_new <= delta0)",
                                    _range(0.0), "largest bond length at which a free top node re-bonds"),
     "interface.patch": Key([], list, "-", "an array of tables [[interface.patch]], each with x = [from, to] in l "
-                           "(0 <= from < to <= 1) and any of kx, ky (>= 0, > 0), delta_b (> delta0)",
+                           "(0 <= from < to <= 1) and any of kx, ky (>= 0, > 0), delta_b (> delta0), softening "
+                           "(>= 0)",
                            lambda v: isinstance(v, list),
                            "stretches of the contact with their own bond properties: a site at x (l, from the "
                            "rear edge) with from <= x < to takes the patch's values; later patches override "
                            "earlier ones and the random field"),
-    "interface.random.key": Key("delta_b", str, "-", "'kx', 'ky' or 'delta_b'", _choice("kx", "ky", "delta_b"),
+    "interface.random.key": Key("delta_b", str, "-", "'kx', 'ky', 'delta_b' or 'softening'",
+                                _choice("kx", "ky", "delta_b", "softening"),
                                 "the bond property the seeded random field varies"),
     "interface.random.cv": Key(0.0, float, "-", ">= 0 (0 = no random field)", _range(0.0),
-                               "coefficient of variation of the random field (lognormal: k_x, k_y stay positive, "
-                               "delta_b above delta0)"),
+                               "coefficient of variation of the random field (lognormal: k_x, k_y and D_c stay "
+                               "positive, delta_b above delta0)"),
     "interface.random.correlation": Key(0.0, float, "a", ">= 0 (0 = uncorrelated sites)", _range(0.0),
                                         "correlation length of the random field along the contact"),
     "interface.random.seed": Key(0, int, "-", ">= 0", _range(0),
@@ -109,6 +111,11 @@ SCHEMA: dict[str, Key] = {
     "interface.contact": Key(0.0, float, "m c^2/a^2", ">= 0 (0 = none, the paper)", _range(0.0),
                              "stiffness of the frictionless contact that keeps an unbonded top site at least "
                              "delta0 above the substrate's surface (a one-sided spring; enters omega_max)"),
+    "interface.softening": Key(0.0, float, "a", ">= 0 (0 = none: a bond breaks at its peak, the paper)", _range(0.0),
+                               "slip-weakening distance D_c: from its peak (where the length test first holds) a "
+                               "bond's shear traction falls linearly over a further slip D_c to zero, unloading "
+                               "along the secant to the origin, then it breaks; patches and the random field may "
+                               "set it per site"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
                                 "largest slip of the block's interface relative to the substrate's that the MPI "
                                 "halo must reach across"),

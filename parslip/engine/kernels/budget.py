@@ -13,11 +13,15 @@ changes it by exactly
     - zeta |u(n+1) - u(n-1)|^2 / (4 dt)             the body drag ("absolute"), per node
     + 1/2 [C F(z) - C F(u)] . (u(n+1) - u(n-1)) / C the bonds' dashpots ("bonds": z - u = g (u(n) - u(n-1)))
     - the staggered energy of the bonds the step broke, + that of those it re-formed
+    - 1/2 (k(n-1) - k(n)) s(n-1) s(n) of each weakening bond, whose shear stiffness the step lowered
+      (``interface.softening``: a bond of stiffness k(n) in step n is a spring re-formed each step)
 
 (``tests/test_energy_budget.py`` proves these forms from outside the engine).  The loop adds the
 per-step terms as they happen, each to a running total of its own unit (the damping to a column of
-its block, the drive's work to a driven node, breaks and re-formations to an interface site), and
-evaluates the state terms at every interface frame (``frame_energies``).
+its block, the drive's work to a driven node, breaks, re-formations and the bonds' weakening to an
+interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
+(``loop._energies``).  A new interface term is one more index below, one more row of ``SITE_TERMS`` if it
+is a running total per site, and one more dataset of ``io.contract.ENERGY_DATASETS``.
 
 Rank invariance.  A column's nodes are updated by tasks whose order depends on the rank count, so a
 plain running sum would round differently on 1 and 3 ranks.  Every total is therefore a pair of
@@ -40,9 +44,14 @@ HI, LO = 0, 1
 #   LOAD_Y                             sum over the loaded nodes of u_y(n) + u_y(n-1) (a): the load's work
 #                                      since the drive started is f_N/2 times its change (F_N is constant
 #                                      by then, so sum_m f (u(m+1) - u(m-1))/2 telescopes)
-W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y = range(7)
-N_TERMS = 7
-RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED)
+#   SOFTENED                           total since the drive started of what the bonds' weakening took
+W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, SOFTENED = range(8)
+N_TERMS = 8
+RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SOFTENED)
+# The running totals kept per interface site (local column of the block's interface row), the rows of
+# ``loop.Budget.sites`` [row, HI|LO, site]: row S_BROKEN holds term SITE_TERMS[S_BROKEN], and so on.
+SITE_TERMS = (BROKEN, FORMED, SOFTENED)
+S_BROKEN, S_FORMED, S_SOFTENED = range(3)
 
 # Bond masks of the row kinds (``parallel.layout``): FULL, NO_UP (top row), NO_DOWN (bottom row).
 ALL = R_ | UR_ | UL_ | L_ | DL_ | DR_
