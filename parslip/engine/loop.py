@@ -100,8 +100,10 @@ Diag = namedtuple("Diag", "flags gflags timers beat")
 #   drag                    the kernels sum the body drag's dissipation every step (``output.energy = "checked"``)
 #   event_limit             events a rank may hold at an agreement before every rank returns EVENTS_FULL
 #   spring, v0dt            the loader spring k_s (m c^2/a^2, with DRIVE_SPRING) and v0 dt (a), in the float type
+#   n_hold                  the step from which the loader holds still (``drive.prestress``: set by ``Simulation``
+#                           once the interface's mean shear traction has reached tau_0; NEVER until then)
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
-                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated drag")
+                              "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated drag n_hold")
 
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
@@ -345,6 +347,18 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
                 return
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def _loader_shift(n, prm):
+    """How far the loader has moved at t(n + 1), v0 (t(n + 1) - t_drive) (a): the driven face's prescribed x
+    for u(n + 1); a spring drive reads its loader at t(n), this less v0 dt.  From ``n_hold`` on the loader
+    holds still where it was at t(n_hold) (for the springs: this plus v0 dt)."""
+    n_ds = prm.n_drive_start
+    if n + 1 <= prm.n_hold:
+        return like(prm.v0 * ((n + 1 - n_ds) * prm.dt), prm.cf)
+    held = like(prm.v0 * ((prm.n_hold - n_ds) * prm.dt), prm.cf)
+    return held + prm.v0dt if prm.drive & DRIVE_SPRING else held
+
+
 @njit(cache=True, _nrt=False)
 def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
     """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1); ``n1`` is where the
@@ -365,7 +379,7 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
                 d0[r, j] = cur.tx[r, j]
     lf = ramp_share(n, prm.n_ramp)
     gy = like(lf * prm.fext, prm.cf)
-    shift = like(prm.v0 * ((n + 1 - n_ds) * prm.dt), prm.cf)
+    shift = _loader_shift(n, prm)
     flags, tm = diag.flags, diag.timers
     clk = tm[T_CLOCK:T_CLOCK + 2]
     timed = n % TIME_EVERY == 0           # sample the phase times (a clock read is 25 to 100 ns)

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
-from ..model.interface import BONDS
+from ..model.interface import BONDS, NEVER
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
 from ..parallel.layout import PAD, build_layout, owned_site_counts, task_ranges
@@ -28,6 +28,7 @@ from .kernels import budget as bg
 from .kernels import exact
 from .kernels.scheme import ramp_share
 from ..scene.memory import CHECK_EVERY, event_room, frame_buffer
+from .prestress import Hold
 from .state import State
 
 # Work per compiled call, in node updates: about 0.3 s, so progress and output stay timely.
@@ -63,7 +64,7 @@ class Simulation:
             cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=st.damping.damped,
             event_limit=self.event_limit, spring=self.dtype.type(st.drive.spring), rated=st.damping.rated,
             drag=st.damping.damped and sc["output.energy"] == "checked",
-            v0dt=self.dtype.type(st.v0 * st.dt))
+            v0dt=self.dtype.type(st.v0 * st.dt), n_hold=NEVER)
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64))
         nsites = max(self.state.owned_sites().stop - self.state.owned_sites().start, 0)
@@ -88,6 +89,7 @@ class Simulation:
         self.snapshots_written = 0
         self.last_frame_step = -1
         self.events_written = 0          # bond events in the output file (over all ranks)
+        self.hold = Hold(st, self.comm)  # drive.prestress: where the loader stops
 
     # ---------------------------------------------------------------- steps --
     @property
@@ -168,6 +170,7 @@ class Simulation:
         chunk = self.chunk
         while True:
             self._snapshot(writer)
+            self.hold.read(self)
             if self.n >= end:          # a stop asked for at the last step finds the run complete, not stopped
                 break
             if control is not None:
@@ -178,7 +181,8 @@ class Simulation:
                     return action
             target = min(end, self.n + chunk, min((k for k in self._snap if k > self.n), default=end),
                          control.next_stop(self.n) if control is not None else end,
-                         st.n_drive_start if self.n < st.n_drive_start else end)
+                         st.n_drive_start if self.n < st.n_drive_start else end,
+                         self.hold.next_read(self.n) or end)
             if self.drive_clock is None and self.n >= st.n_drive_start:
                 self.drive_clock = (time.monotonic(), time.process_time(), self.n)
             self._phase("loop")
@@ -236,7 +240,9 @@ class Simulation:
             self.last_frame_step = int(fr.step[count - 1])
         if writer is not None and count:
             base = int(fr.cursor[L.C_BASE])
-            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]), self.budget_frames(count))
+            held = None if self.hold.step is None else self.hold.step - self.setup.n_drive_start
+            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]), self.budget_frames(count),
+                                    held=held)
         fr.cursor[L.C_BASE] += count
         fr.cursor[L.C_COUNT] = 0
         ev = self.state.iface.events
@@ -308,6 +314,7 @@ class Simulation:
         self.snapshots_total = snaps + len(later)
         self.snapshots_written = snaps
         self._energy_restore(attrs)
+        self.hold.restore(self, attrs)
 
     # ---------------------------------------------------------- energy budget --
     def _pairs(self, parts) -> np.ndarray:
@@ -407,7 +414,7 @@ class Simulation:
         counters = self.counters.copy()
         if self.comm is not None:
             counters = self.comm.allreduce(counters)
-        return {**self._energy_checkpoint(), "step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
+        return {**self._energy_checkpoint(), **self.hold.attrs(), "step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
                 "frames_written": self.frames_written, "last_frame_step": self.last_frame_step,
                 "events_written": self.events_written,
                 "snapshots_written": self.snapshots_written, "counters": counters,

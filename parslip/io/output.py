@@ -467,10 +467,11 @@ class Output:
             f.attrs["n_ranks"] = self.size
 
     # --------------------------------------------------------------- writes --
-    def interface_frames(self, k0, count, frames, times, energy=None):
+    def interface_frames(self, k0, count, frames, times, energy=None, held=None):
         """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites,
         recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``) and, from rank 0,
-        their energy budget ``energy`` (``ENERGY_DATASETS``; None: not kept)."""
+        their energy budget ``energy`` (``ENERGY_DATASETS``; None: not kept).  ``held``: the drive step from
+        which the loader holds still (``drive.prestress``), None while it moves."""
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.site0, self.site0 + ns))
         self._test_hooks(k0 + count)
@@ -480,7 +481,8 @@ class Output:
         if self.root:
             st = self.spec.setup
             steps = frames.step[:count] - st.n_drive_start
-            loader = steps * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count)
+            moved = steps if held is None else np.minimum(steps, held)
+            loader = moved * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count)
 
             def put():
                 self._ds("interface/time")[k0:k0 + count] = times

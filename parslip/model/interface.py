@@ -31,7 +31,8 @@ sqrt(delta_b^2 - y^2), tau_p = k_x x_b, and its fracture energy (``fracture``)
     Gamma = tau_p x_b / 2 + (tau_p - tau_r) D_c / 2                       (m c^2/a per bond)
 
 is its elastic energy at the peak, which the damage takes, and the weakening's area above the residual;
-at D_c = 0 it is the stored energy at the break, the paper's law.
+at D_c = 0 it is the stored energy at the break, the paper's law.  The nucleation (``Nucleation``)
+forces the same weakening on a zone of sites: w = max(delta_m / D_c, the forcing's share of its time).
 
 The rules a scene can choose are codes, each written once as an inlined
 function in ``engine.kernels.interface``:
@@ -183,11 +184,21 @@ EVENT_KINDS = {BREAK: "break", FORM: "re-formation"}
 #   delta0 (a), rebond_length (a), reform, rebond and heal: the rules' codes; heal_du = heal_speed dt (a):
 #   the largest relative x-displacement per step at which a site re-bonds; n_heal = ceil(heal_time/dt).
 #   contact (m c^2/a^2): the stiffness of the unbonded sites' contact with the substrate (0: none).
-#   soften: SOFTEN when some bond weakens (a site's D_c > 0), else 0 (the paper's break); mu: the contact's
-#   friction coefficient, which sets the weakening's residual; tiny: the smallest positive normal number of
-#   the float type (the peak of a bond that peaks with no shear stretch).
-Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact soften mu tiny")
+#   soften: SOFTEN when some bond weakens (a site's D_c > 0, or a nucleation), else 0 (the paper's break);
+#   mu: the contact's friction coefficient, which sets the weakening's residual; tiny: the smallest positive
+#   normal number of the float type (the peak of a bond that peaks with no shear stretch).
+#   nuc: the nucleation's code (NUCLEATE_*, 0 none); nuc_lo, nuc_hi: its global sites [lo, hi);
+#   nuc_centre: the zone's centre in sites (site s stands at s + 1/2); nuc_delay: steps per site the forced
+#   front takes (0: every site at once); nuc_steps: the steps a site's forcing takes to the residual;
+#   nuc_start: the step the forcing starts (NEVER until decided: ``engine.simulation`` sets it once a held
+#   prestress has settled).
+Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact soften mu tiny nuc "
+                            "nuc_lo nuc_hi nuc_centre nuc_delay nuc_steps nuc_start")
 SOFTEN = 1
+NUCLEATE_TIME, NUCLEATE_FORCED = 1, 2
+NUCLEATION_CODES = {"none": 0, "time": NUCLEATE_TIME, "forced": NUCLEATE_FORCED}
+# A step no run reaches: the nucleation's start before it is decided.
+NEVER = 2 ** 62
 
 
 PATCH_KEYS = ("kx", "ky", "delta_b", "softening")
@@ -266,6 +277,75 @@ def site_x(n_sites: int) -> np.ndarray:
     return (np.arange(n_sites) + 0.5) / max(n_sites, 1)
 
 
+def zone_sites(x, n_sites: int) -> tuple[int, int]:
+    """The global sites [lo, hi) of a stretch x = (from, to) of the contact (l): those with from <= x_s < to, as
+    a patch takes them (``site_x``); lo = hi when it holds none."""
+    inside = np.flatnonzero((site_x(n_sites) >= x[0]) & (site_x(n_sites) < x[1]))
+    return (int(inside[0]), int(inside[-1]) + 1) if len(inside) else (0, 0)
+
+
+@dataclass(frozen=True)
+class Nucleation:
+    """A rupture started in the contact (``interface.nucleation``; Andrews 1976, Bizzarri 2010): from ``start``
+    (l/c_r after the held prestress has settled, or after the drive's start without one), the bonds of the zone
+    x = [from, to) (l) weaken to their residual whatever their slip:
+
+      "time"    every site of the zone at once, its weakening share w rising linearly to 1 over ``duration``
+      "forced"  a front from the zone's centre grows both ways at ``speed`` (c_r) to its ends; each site it
+                reaches weakens as above over ``duration`` (0: at once), then the zone is left free
+
+    A site's forcing ends when its share reaches 1 (its bond breaks there, if it had one): a bond that
+    re-forms later is free.  Times in l/c_r, x in l, speed in c_r."""
+    kind: str                    # "time" or "forced"
+    x: tuple                     # (from, to) in l
+    duration: float = 0.0        # l/c_r: a site's forcing, from its start to its residual
+    speed: float = 0.0           # c_r: the forced front's speed ("forced")
+    start: float = 0.0           # l/c_r after the prestress settled (or after the drive's start)
+
+    KEYS = ("kind", "x", "duration", "speed", "start")
+
+    @classmethod
+    def from_scene(cls, scene: dict) -> "Nucleation | None":
+        kind = scene["interface.nucleation.kind"]
+        if kind == "none":
+            return None
+        return cls(kind=kind, x=tuple(float(v) for v in scene["interface.nucleation.x"]),
+                   duration=float(scene["interface.nucleation.duration"]),
+                   speed=float(scene["interface.nucleation.speed"]), start=float(scene["interface.nucleation.start"]))
+
+    def sites(self, n_sites: int) -> tuple[int, int]:
+        """The zone's global sites [lo, hi) (``zone_sites``)."""
+        return zone_sites(self.x, n_sites)
+
+
+def check_nucleation(scene: dict) -> None:
+    """Refuse, with one line naming the key, the value and what is accepted (ConfigError), a nucleation that
+    cannot start a rupture in the contact."""
+    from ..errors import ConfigError
+    kind = scene["interface.nucleation.kind"]
+    x = scene["interface.nucleation.x"]
+    if kind == "none":
+        return
+    ok_x = (isinstance(x, list) and len(x) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                        for v in x))
+    if not ok_x or not 0.0 <= x[0] < x[1] <= 1.0:
+        why = ("not [from, to]" if not ok_x else "reversed or empty" if x[0] >= x[1]
+               else "outside the contact [0, 1]")
+        raise ConfigError(f"interface.nucleation.x = {x!r}: {why}; accepted: [from, to] in l, 0 <= from < to <= 1 "
+                          f"(the zone of the contact the nucleation weakens)")
+    n = scene["lattice.top_cols"]
+    lo, hi = Nucleation(kind, tuple(x)).sites(n)
+    if hi <= lo:
+        raise ConfigError(f"interface.nucleation.x = {x!r}: holds no interface site (site s stands at (s + 1/2)/"
+                          f"{n} l); accepted: a zone [from, to] that holds at least one")
+    if scene["lattice.bottom_rows"] == 0:
+        raise ConfigError(f"interface.nucleation.kind = {kind!r}: a free block (lattice.bottom_rows = 0) has no "
+                          f"contact; accepted: 'none' without a substrate")
+    if kind == "forced" and not scene["interface.nucleation.speed"] > 0:
+        raise ConfigError(f"interface.nucleation.speed = {scene['interface.nucleation.speed']!r}: a forced "
+                          f"nucleation grows at this speed; accepted: > 0 (in c_r) with kind = 'forced'")
+
+
 @dataclass(frozen=True)
 class InterfaceLaw:
     """The adhesive bonds of one scene (see the module docstring); lengths in a, stiffnesses in m c^2/a^2."""
@@ -283,6 +363,7 @@ class InterfaceLaw:
     contact: float = 0.0         # m c^2/a^2: an unbonded site's contact stiffness (0: none, the paper)
     softening: float = 0.0       # a: D_c, the weakening distance past the peak (0: the paper's break)
     friction: float = 0.0        # mu, the contact's friction coefficient (0: none)
+    nucleation: Nucleation | None = None
 
     @classmethod
     def from_scene(cls, scene: dict) -> "InterfaceLaw":
@@ -298,7 +379,8 @@ class InterfaceLaw:
                    random=((scene["interface.random.key"], float(scene["interface.random.cv"]),
                             float(scene["interface.random.correlation"]), int(scene["interface.random.seed"]))
                            if scene["interface.random.cv"] > 0 else ()),
-                   contact=float(scene["interface.contact"]), softening=float(scene["interface.softening"]))
+                   contact=float(scene["interface.contact"]), softening=float(scene["interface.softening"]),
+                   nucleation=Nucleation.from_scene(scene))
 
     @property
     def uniform(self) -> bool:
@@ -312,18 +394,29 @@ class InterfaceLaw:
 
     @property
     def soften(self) -> int:
-        """SOFTEN when some bond may weaken (a site's D_c > 0), else 0 (the paper's break)."""
-        return SOFTEN if self.softening > 0 or any(
+        """SOFTEN when some bond may weaken (a site's D_c > 0 or a nucleation), else 0 (the paper's break)."""
+        return SOFTEN if self.nucleation is not None or self.softening > 0 or any(
             dict(values).get("softening", 0) > 0 for _, values in self.patches) else 0
 
     def rules(self, dtype, setup) -> Rules:
         """The scalars the compiled update reads, lengths in the float type ``dtype``; ``setup`` gives the
-        time step (a/c), the velocity unit c_r and the time unit l/c_r (``scene.derive.Setup``)."""
+        time step (a/c), the velocity unit c_r, the time unit l/c_r, the sites, and whether the drive holds a
+        prestress (``scene.derive.Setup``)."""
         f = np.dtype(dtype).type
+        nuc = dict(nuc=0, nuc_lo=0, nuc_hi=0, nuc_centre=0.0, nuc_delay=0.0, nuc_steps=0, nuc_start=NEVER)
+        z = self.nucleation
+        if z is not None:
+            n = setup.lattice.n_top_sites
+            lo, hi = z.sites(n)
+            steps = setup.t_unit / setup.dt              # per l/c_r
+            nuc.update(nuc=NUCLEATION_CODES[z.kind], nuc_lo=lo, nuc_hi=hi, nuc_centre=0.5 * (z.x[0] + z.x[1]) * n,
+                       nuc_delay=(1.0 / (z.speed * setup.material.c_r * setup.dt) if z.kind == "forced" else 0.0),
+                       nuc_steps=int(round(z.duration * steps)),
+                       nuc_start=NEVER if setup.drive.prestress else setup.n_drive_start + int(round(z.start * steps)))
         return Rules(delta0=f(self.delta0), rebond_length=f(self.rebond_length), reform=self.reform,
                      rebond=self.rebond, heal=self.heal, heal_du=f(self.heal_speed * setup.material.c_r * setup.dt),
                      n_heal=self.heal_steps(setup), contact=f(self.contact), soften=self.soften,
-                     mu=f(self.friction), tiny=f(np.finfo(np.dtype(dtype)).tiny))
+                     mu=f(self.friction), tiny=f(np.finfo(np.dtype(dtype)).tiny), **nuc)
 
     def heal_steps(self, setup) -> int:
         """n_heal = ceil(heal_time / dt): the steps a claim must last before the site re-bonds (HEAL_TIME);
@@ -405,7 +498,7 @@ class InterfaceLaw:
         if self.contact:
             out.append(f"interface.contact = {self.contact!r}")
         if self.soften:
-            out.append("interface.softening")
+            out.append("interface.softening or interface.nucleation")
         return out
 
     def normal_stiffness(self, ky: float) -> float:

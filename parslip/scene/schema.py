@@ -116,6 +116,21 @@ SCHEMA: dict[str, Key] = {
                                "bond's shear traction falls linearly over a further slip D_c to zero, unloading "
                                "along the secant to the origin, then it breaks; patches and the random field may "
                                "set it per site"),
+    "interface.nucleation.kind": Key("none", str, "-", "'none', 'time' or 'forced'", _choice("none", "time", "forced"),
+                                     "a rupture started in the contact: 'time', the zone's bonds weaken to their "
+                                     "residual over nucleation.duration; 'forced', a front from the zone's centre "
+                                     "grows at nucleation.speed to its ends, each site it reaches weakening so"),
+    "interface.nucleation.x": Key([], list, "l", "[from, to] with 0 <= from < to <= 1, holding a site (with a kind)",
+                                  lambda v: isinstance(v, list), "the zone of the contact the nucleation weakens "
+                                  "(a site at x, l from the rear edge, with from <= x < to)"),
+    "interface.nucleation.duration": Key(0.0, float, "l/c_r", ">= 0 (0 = at once)", _range(0.0),
+                                         "how long a site of the zone takes to weaken to its residual once its "
+                                         "forcing starts"),
+    "interface.nucleation.speed": Key(0.0, float, "c_r", "> 0 with kind = 'forced' (0 = unused)", _range(0.0),
+                                      "the speed at which a forced nucleation's front grows from the zone's centre"),
+    "interface.nucleation.start": Key(0.0, float, "l/c_r", ">= 0", _range(0.0),
+                                      "when the nucleation starts: after the held prestress has settled "
+                                      "(drive.prestress), else after the drive's start"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: v0 * duration + 2)", _range(0.0),
                                 "largest slip of the block's interface relative to the substrate's that the MPI "
                                 "halo must reach across"),
@@ -136,6 +151,16 @@ SCHEMA: dict[str, Key] = {
                       "push and pull only", lambda v: isinstance(v, list),
                       "the rows of the driven face the push or pull acts on, counted from the interface row 0 "
                       "(a loading point at a chosen height)"),
+    "drive.prestress.tau0": Key(0.0, float, "rho c_r^2", ">= 0 (0 = none: the drive runs to the end), below the "
+                                "interface's mean peak strength", _range(0.0),
+                                "hold a prestress: stop the drive once the interface's mean shear traction over "
+                                "drive.prestress.x (summed exactly, the same on any rank count) reaches this, and "
+                                "hold the driven face there while the lattice settles"),
+    "drive.prestress.settle": Key(2.0, float, "l/c_r", ">= 0", _range(0.0),
+                                  "how long the held prestress settles before a nucleation starts"),
+    "drive.prestress.x": Key([0.0, 1.0], list, "l", "[from, to] with 0 <= from < to <= 1, holding a site",
+                             lambda v: isinstance(v, list), "the stretch of the contact whose sites' mean shear "
+                             "traction the prestress reads (e.g. inside strong edge patches)"),
     "drive.v0": Key(1e-3, float, "c_r", "> 0", _range(0.0, lo_open=True), "drive velocity"),
     "drive.duration": Key(100.0, float, "l/c_r", "> 0", _range(0.0, lo_open=True),
                           "simulated drive time after settling"),

@@ -11,7 +11,7 @@ offset there).  For a top site at column g bonded to bottom site q:
 and the opposite force on the bottom node.  Each step, at positions u(t):
 
 1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b; with
-   slip weakening (``interface.softening``) it weakens from
+   slip weakening (``interface.softening``, a nucleation) it weakens from
    there and breaks once weakened to its residual (``_soften``);
 2. each free top site claims the nearest free bottom site within the law's
    re-bonding length R (delta0 unless set; ties: lower bottom index), among
@@ -131,13 +131,26 @@ def _heals(rules, bonds, j, q, dvx):
 # --- Slip weakening (``model.interface``: the peak, the envelope, the secant), chosen by rules.soften --------
 
 @njit(cache=True, inline="always", _nrt=False)
+def _forced(p, n, site):
+    """The nucleation's share of the weakening of global site ``site`` at step n: (n - n_s)/n_w for n_s <= n <=
+    n_s + n_w (1 at n_s when n_w = 0), n_s the step its forcing starts (the nucleation's start, plus the
+    forced front's travel from the zone's centre), n_w = nuc_steps; -1 where and when it is not forced."""
+    if p.nuc == 0 or site < p.nuc_lo or site >= p.nuc_hi or n < p.nuc_start:
+        return -1.0
+    t = n - p.nuc_start - np.int64(np.ceil(p.nuc_delay * abs(site + 0.5 - p.nuc_centre)))
+    if t < 0 or t > p.nuc_steps:
+        return -1.0
+    return t / p.nuc_steps if p.nuc_steps > 0 else 1.0
+
+
+@njit(cache=True, inline="always", _nrt=False)
 def _bond_k(p, bonds, j, site, n, s, dy):
     """(k, w): the shear stiffness of top site j's bond (global ``site``) at step n with shear stretch s = x_ij -
     x0 and y_ij = dy, and its weakening share.  Undamaged (peak 0): k_x, 0.  Weakening: the secant
     k = tau_m / (s_p + delta_m) of the envelope tau_m = tau_p - (tau_p - tau_r) w, with delta_m the largest slip
-    past the peak (its row, or |s| - s_p if larger), w = min(1, delta_m / D_c),
+    past the peak (its row, or |s| - s_p if larger), w = min(1, max(delta_m / D_c, the nucleation's share)),
     tau_p = k_x s_p and tau_r = min(mu k_y max(0, delta0 - y_ij), tau_p) (``model.interface``).  Pure: with the
-    rows as step n - 1 left them it gives the stiffness step n - 1 applied (at its s and y_ij)."""
+    rows as step n - 1 left them it gives the stiffness step n - 1 applied (at its s, y_ij and n)."""
     kx = bonds[KX, j]
     peak = bonds[PEAK, j]
     zero = like(0, kx)
@@ -146,7 +159,7 @@ def _bond_k(p, bonds, j, site, n, s, dy):
     slipped = max(bonds[SLIPPED, j], abs(s) - peak)
     dc = bonds[SOFTENING, j]
     w = slipped / dc if dc > 0 else zero
-    w = min(w, like(1, kx))
+    w = min(max(w, like(_forced(p, n, site), kx)), like(1, kx))
     tp = kx * peak
     tr = min(p.mu * max(zero, bonds[KY, j] * (p.delta0 - dy)), tp)
     return (tp - (tp - tr) * w) / (peak + slipped), w
@@ -165,8 +178,8 @@ def _shear_k(p, bonds, j, site, n, s, dy):
 def _soften(p, bonds, j, site, n, dx, dy, dxp, dyp):
     """Step n of top site j's bond (global ``site``; (x_ij, y_ij) = (dx, dy) at u(n), (dxp, dyp) at u(n - 1))
     by the slip-weakening rule: an undamaged bond holds elastically below its breaking length and, unforced,
-    breaks at it when D_c = 0 (the paper); at its peak (the length test) it starts to weaken (peak =
-    |x_ij - x0|, never 0); a weakening bond takes its largest slip past the peak and
+    breaks at it when D_c = 0 (the paper); at its peak (the length test) or where the nucleation forces it, it
+    starts to weaken (peak = |x_ij - x0|, never 0); a weakening bond takes its largest slip past the peak and
     the secant of its envelope (``_bond_k``), and breaks when w = 1 or its length reaches delta_b + D_c.
 
     Returns (k, holds, spent): the shear stiffness the bond applies this step (or broke with), whether it
@@ -178,11 +191,12 @@ def _soften(p, bonds, j, site, n, dx, dy, dxp, dyp):
     s = dx - x0
     db = bonds[DELTA_B, j]
     dc = bonds[SOFTENING, j]
+    forced = _forced(p, n, site)
     l2 = dx * dx + dy * dy
     if bonds[PEAK, j] == 0:
-        if l2 < db * db:
+        if forced < 0 and l2 < db * db:
             return kx, True, 0.0
-        if dc == 0:
+        if forced < 0 and dc == 0:
             return kx, False, 0.0
         bonds[PEAK, j] = max(abs(s), p.tiny)
         bonds[SLIPPED, j] = 0
@@ -538,6 +552,25 @@ def staggered(n, tx, ty, bx, by, txp, typ, bxp, byp, it, out):
             dxp, dyp = _gap(gl, q, txp, typ, bxp, byp, j, i, d0)
             kx = _shear_k(p, bonds, j, gl - g.tfirst, n - 1, dxp - bonds[X0, j], dyp)
             bg.add(out, bg.ELASTIC, _staggered_bond(gl, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds, kx))
+
+
+@njit(cache=True, _nrt=False)
+def shear_sum(n, tx, ty, bx, by, it, lo, hi, quantum):
+    """The shear force k (x_ij - x0) (m c^2/a: the frames' sxy times a rho c_r^2) the bonds of this rank's OWNED
+    sites of global index in [lo, hi) carry at u(n), each rounded to a whole number of ``quantum`` and summed
+    as an integer: exact, so the ranks' sums add to the same value in any order (``engine.prestress``)."""
+    g, bonds, p = it.geom, it.bonds, it.rules
+    total = 0
+    for j in range(g.town0, g.town1):
+        site = j + g.tbase - g.tfirst
+        q = _partner(bonds, j)
+        i = q - g.bbase
+        if lo <= site < hi and q >= 0 and g.blo <= i < g.bhi:
+            dx, dy = _gap(j + g.tbase, q, tx, ty, bx, by, j, i, p.delta0)
+            s = dx - bonds[X0, j]
+            f = float(_shear_k(p, bonds, j, site, n, s, dy) * s)
+            total += np.int64(np.floor(f / quantum + 0.5))
+    return total
 
 
 @njit(cache=True, _nrt=False)
