@@ -174,26 +174,104 @@ def test_gamma_from_a_drawn_frame():
     assert g["source"] == "frames" and np.allclose(g["Gamma"], want[4:16])
 
 
-def test_what_the_interface_takes_inside_each_contour():
-    """A front one site per 0.002 l/c_r along 500 sites; each site breaks at the tip (0.01 m c_r^2), re-forms 10
-    sites behind it (0.004 put back) and breaks again 40 sites behind it (0.005): inside the inner contour
-    (1.5 Lambda, about 25 a) the interface takes 0.006 per a of advance, inside the outer (3 Lambda) 0.011."""
-    n, dt0 = 500, 0.002
+# Tips that run over 500 sites (x in l, t in l/c_r): one steady at 0.5 c_r, one speeding up from 0.3 to 1.05 c_r
+# (x = 0.3 t + 0.375 t^2), each reaching site centre x at tip_t(x).
+TIPS = {"steady": lambda x: x / 0.5, "accelerating": lambda x: (np.sqrt(0.09 + 1.5 * x) - 0.3) / 0.75}
+
+
+@pytest.mark.parametrize("tip", sorted(TIPS))
+def test_what_the_interface_takes_inside_each_contour(tip):
+    """Each site breaks as the tip reaches it (0.01 m c_r^2), re-forms when the tip is 1.4 Lambda further
+    (0.004 put back) and breaks again at 2.9 Lambda (0.005): inside the inner contour (1.5 Lambda about the
+    tip, as route 1 centres it) the interface takes 0.006 per a of advance, inside the outer (3 Lambda) 0.011,
+    for the steady tip and the accelerating one alike; the breaks alone take 0.01 and 0.015.  About the
+    stretch's fitted line instead, the accelerating tip's re-formations fall outside the inner contour
+    wherever the line is over 0.1 Lambda ahead of the tip, and the take moves by over 10 %."""
+    n = 500
     s = np.arange(n)
     x = (s + 0.5) / n
-    f = SimpleNamespace(tip={"x": x, "t": s * dt0, "step": s, "frame": s})
-    site = np.concatenate([s, s, s])
-    time = np.concatenate([s * dt0, (s + 10) * dt0, (s + 40) * dt0])
-    kind = np.concatenate([np.ones(n), 2 * np.ones(n), np.ones(n)]).astype(np.uint8)
-    energy = np.concatenate([np.full(n, 0.01), np.full(n, 0.004), np.full(n, 0.005)])
+    tip_t = TIPS[tip](x)
+    f = SimpleNamespace(tip={"x": x, "t": tip_t, "step": s, "frame": s})
     scene = {"material.nu": 0.2, "material.model": "plane_strain", "material.velocity_unit": "c_r",
              "material.bottom_kn": 10.0, "material.bottom_kt": 0.0}
-    run = SimpleNamespace(events={"site": site, "time": time, "kind": kind, "energy": energy},
-                          attrs={"l": float(n)}, interface={"kx": np.full(n, 0.1)}, x=x, scene=scene)
+    run = SimpleNamespace(attrs={"l": float(n)}, interface={"kx": np.full(n, 0.1)}, x=x, scene=scene)
     lam = cracks.process_zone(run)
-    assert 15 < lam < 18                                       # "about 15 a at k_x = 0.1"
+    assert 15 < lam < 18                                       # "about 17 a at k_x = 0.1"
+    k_in, k_out = int(round(1.4 * lam)), int(round(2.9 * lam))
+    ok_in, ok_out = s + k_in < n, s + k_out < n
+    site = np.concatenate([s, s[ok_in], s[ok_out]])
+    time = np.concatenate([tip_t, tip_t[(s + k_in)[ok_in]], tip_t[(s + k_out)[ok_out]]])
+    kind = np.concatenate([np.ones(n), 2 * np.ones(ok_in.sum()), np.ones(ok_out.sum())]).astype(np.uint8)
+    energy = np.concatenate([np.full(n, 0.01), np.full(ok_in.sum(), 0.004), np.full(ok_out.sum(), 0.005)])
+    run.events = {"site": site, "time": time, "kind": kind, "energy": energy}
     inner, outer = cracks.interface_take(run, f)
-    assert inner == pytest.approx(0.006, rel=0.02) and outer == pytest.approx(0.011, rel=0.02)
+    assert inner == pytest.approx(0.006, rel=0.01) and outer == pytest.approx(0.011, rel=0.01)
+    assert cracks.interface_take(run, f, net=False) == pytest.approx([0.01, 0.015], rel=0.01)
+    st = cracks.steady_stretch(f)                               # the measure as it was, about the fitted line
+    sel = (time >= st["t0"]) & (time <= st["t1"])
+    near = np.abs(x[site[sel]] - st["x_at"](time[sel])) * n <= 1.5 * lam
+    signed = np.where(kind[sel] == 1, 1.0, -1.0) * energy[sel]
+    line = signed[near].sum() / (abs(st["V"]) * (st["t1"] - st["t0"]) * n)
+    assert (abs(line / inner - 1) > 0.1) == (tip == "accelerating")
+
+
+def _crack_record(tip_t, dt=1e-5, frame=0.01):
+    """A crack drawn as its event record (each site of len(tip_t) breaking at the step nearest tip_t, dt l/c_r a
+    step) and its frames (broken from then on), as a run: the catalogue finds its front and fits its speeds."""
+    from parslip.analysis.results import Run
+    from parslip.io.contract import EVENT_BREAK
+    n = len(tip_t)
+    step = np.rint(tip_t / dt).astype(np.int64)
+    t = np.arange(int(tip_t[-1] / frame) + 20) * frame
+    it = {"t": t, "x": (np.arange(n) + 0.5) / n, "intact": (t[:, None] < step[None, :] * dt).astype(np.uint8),
+          "ux": np.zeros((len(t), n)), "uy": np.zeros((len(t), n)), "step": np.rint(t / dt).astype(np.int64)}
+    it["events"] = {"step": step, "time": step * dt, "site": np.arange(n), "kind": np.full(n, EVENT_BREAK, np.uint8),
+                    "partner": np.arange(n), "site_column0": 0, "dt": dt, "c_s": math.inf, "c_l": math.inf}
+    return Run.from_arrays(it, {}, {"c_r": 1.0, "l": float(n)})
+
+
+@pytest.mark.parametrize("tip", sorted(TIPS))
+def test_route_1_takes_the_tips_local_speed(tip):
+    """Route 1's speed at a snapshot (``tip_speed_at``, from the catalogue's local fits) is the drawn tip's
+    dx/dt within 0.5 % over the steady stretch, for the steady tip and the accelerating one, whose stretch's
+    fitted speed is up to 40 % off it.  A snapshot of the accelerating front is the steady field of a crack
+    at its local speed (laid here at 0.5 c_s, the stretch's speed scaled alike): route 1 returns that
+    field's G within 1 % with the local speed, and misses it by over 10 % with the stretch's."""
+    (front,) = _crack_record(TIPS[tip]((np.arange(500) + 0.5) / 500)).fronts()
+    st = cracks.steady_stretch(front)
+    t = np.linspace(st["t0"], st["t1"], 9)
+    true = np.full(len(t), 0.5) if tip == "steady" else 0.3 + 0.75 * t
+    local = cracks.tip_speed_at(front, t)
+    assert local == pytest.approx(true, rel=5e-3)
+    off = np.max(np.abs(st["V"] / true - 1))
+    assert off < 1e-3 if tip == "steady" else off > 0.3
+    if tip == "steady":
+        return
+    kn, kt = BORN
+    ref, bonds, p, p_prev, dt = laid_crack(kn, kt, 0.5)
+    want = cracks.field_g(0.05, 0.5, kn, kt)
+    k = 0                                                     # the stretch's start: local 0.61, stretch 0.89 c_r
+    V = 0.5 * st["V"] / local[k]
+    assert cracks.contour_flux(ref, p, p_prev, dt, bonds, (0.0, 0.0, 12.0), 0.5 * local[k] / true[k])["G"] == \
+        pytest.approx(want, rel=0.01)
+    assert abs(cracks.contour_flux(ref, p, p_prev, dt, bonds, (0.0, 0.0, 12.0), V)["G"] / want - 1) > 0.1
+
+
+def test_route_1_refuses_a_run_with_contact_in_one_line():
+    """A run with interface.contact > 0: route 1 cannot count the contact's springs, so ``contour_g_run``
+    refuses it with one line naming the key, the value and what it needs, and the per-front fields are null
+    (route 2 and Gamma are read as before)."""
+    from parslip.errors import ConfigError
+    run, _ = drawn_crack_run()
+    touching = type(run).from_arrays(run.interface, {**run.scene, "interface.contact": 0.3}, run.attrs)
+    (f,) = touching.fronts()
+    assert cracks.route1_blocker(touching)[:2] == ("interface.contact", 0.3)
+    with pytest.raises(ConfigError) as e:
+        cracks.contour_g_run(touching, f)
+    assert len(str(e.value).splitlines()) == 1 and "interface.contact = 0.3" in str(e.value)
+    assert "interface.contact = 0" in str(e.value)
+    assert f.G_contour_inner is None and f.G_contour_outer is None and f.G_field is not None and f.Gamma is not None
+    assert cracks.route1_blocker(run) is None
 
 
 def drawn_field_run(x, tip_t, t, K, tau0):
@@ -477,3 +555,16 @@ def test_the_G_scene_resolves_both_routes():
     height = s["lattice.top_rows"] * ROW_HEIGHT / cracks.process_zone(run)
     assert height >= 20 and cracks.field_resolved(run), height
     assert not cracks.field_resolved(SimpleNamespace(scene={**s, "interface.kx": 0.1}, interface={}))
+
+
+def test_route_1_over_a_stretch_is_the_energy_per_unit_advance():
+    """``route1_mean``: sum of G_i |V_i| over sum of |V_i|, so two snapshots of a running tip (G 0.02 at 0.8
+    c_r) and two in a pause (V 0.001 c_r, G -0.2 to 0.3 from two small numbers) give 0.02 within 1 %, where the
+    plain mean would give 0.06 and -0.03; for a steady tip it is the mean."""
+    rows = [{"V": 0.8, "G": [0.02, 0.021]}, {"V": -0.001, "G": [0.3, -0.2]}, {"V": 0.8, "G": [0.02, 0.021]},
+            {"V": 0.001, "G": [-0.1, 0.05]}]
+    assert cracks.route1_mean(rows, 0) == pytest.approx(0.02, rel=1e-2)
+    assert cracks.route1_mean(rows, -1) == pytest.approx(0.021, rel=1e-2)
+    assert abs(np.mean([r["G"][0] for r in rows]) / 0.02 - 1) > 1
+    steady = [{"V": 0.5, "G": [g]} for g in (0.01, 0.02, 0.03)]
+    assert cracks.route1_mean(steady, 0) == pytest.approx(0.02) and cracks.route1_mean([], 0) is None

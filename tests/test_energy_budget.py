@@ -189,3 +189,104 @@ def test_the_balance_is_the_checked_damping(tmp_path):
     for name in a:
         if name not in ("energy/damping", "energy/residual"):
             assert a[name].tobytes() == b[name].tobytes(), name
+
+
+# --- the contact's springs ------------------------------------------------------------------------------
+
+# SMALL pulled fast with a strong patch and a contact stiffer than the bonds' normal spring (k_y = 0.3): bonds
+# break, re-form and leave sites pressed onto the substrate's surface, so contacts switch on and off.
+CONTACT = {**SMALL, "drive.mode": "pull", "drive.v0": 0.05, "drive.duration": 4.0,
+           "interface.contact": 1.0, "interface.patch": [{"x": [0.3, 0.5], "delta_b": 0.9}],
+           "output.snapshots": 0, "output.energy": "checked"}
+
+
+class _Contact:
+    """The contact's forces from outside the engine (``model.interface``'s law, in numpy on the OWNED nodes in
+    global id order): a free top site below delta0 over the segment between the two substrate interface
+    sites that bracket its x gets k_c (delta0 - d) n, the segment's ends -(1 - w) and -w of it."""
+
+    def __init__(self, sim):
+        from parslip.model.lattice import BOTTOM, TOP
+        nd = sim.state.nodes()
+        top = np.flatnonzero((nd["block"] == TOP) & (nd["row"] == 0))
+        bottom = np.flatnonzero((nd["block"] == BOTTOM) & (nd["row"] == nd["row"][nd["block"] == BOTTOM].max()))
+        self.top, self.bottom = top[np.argsort(nd["x"][top])], bottom[np.argsort(nd["x"][bottom])]
+        self.ref = np.stack([nd["x"], nd["y"]], axis=1)
+        self.kc, self.d0 = sim.setup.law.contact, sim.setup.law.delta0
+        assert np.allclose(self.ref[self.top, 1] - self.ref[self.bottom[0], 1], self.d0)
+
+    def forces(self, u, free) -> np.ndarray:
+        p = self.ref + u
+        f = np.zeros_like(p)
+        xs = p[self.bottom, 0]
+        for k in np.flatnonzero(free):
+            top = p[self.top[k]]
+            i = np.searchsorted(xs, top[0], side="right") - 1
+            if i < 0 or i + 1 >= len(xs):
+                continue
+            a, b = p[self.bottom[i]], p[self.bottom[i + 1]]
+            e = b - a
+            n = np.array([-e[1], e[0]]) / np.hypot(*e)
+            d = (top - a) @ n
+            if d >= self.d0:
+                continue
+            w = min(max((top - a) @ e / (e @ e), 0.0), 1.0)
+            fc = self.kc * (self.d0 - d) * n
+            f[self.top[k]] += fc
+            f[self.bottom[i]] -= (1 - w) * fc
+            f[self.bottom[i + 1]] -= w * fc
+        return f
+
+
+def _contact_work(sim, steps) -> float:
+    """The contact's work on the nodes over ``steps`` steps from the drive's start, sum of f(n) . (u(n+1) -
+    u(n-1))/2 with f from outside the engine (``_Contact``) on the sites free after each step's update."""
+    sim.run(until=sim.setup.n_drive_start)
+    contact = _Contact(sim)
+    un, uo = sim.u, sim.u_prev
+    work = 0.0
+    for _ in range(steps):
+        sim.step()
+        new = sim.u
+        work += 0.5 * float(np.sum(contact.forces(un, sim.state.owned_partner() < 0) * (new - uo)))
+        uo, un = un, new
+    return work
+
+
+def test_the_budget_closes_with_the_contact(tmp_path):
+    """With interface.contact on, "checked": the residual stays below 1e-6 of the drive's work at every frame
+    (it held the contact springs' work before they were counted, 7 % of it here), and what the contact's
+    terms say its springs gave the nodes, contact_switched less the change of contact, equals the contact
+    force's work summed step by step from outside the engine (1e-9 of the drive's work)."""
+    e = _engine_budget(tmp_path, CONTACT)
+    work = np.max(e["work_drive"])
+    assert work > 0 and np.all(np.abs(e["residual"]) <= 1e-6 * work), np.max(np.abs(e["residual"])) / work
+    st = derive(scene(**CONTACT))
+    k = len(e["residual"]) - 1
+    outside = _contact_work(Simulation(st), k * st.frame_every) / st.material.c_r ** 2
+    assert abs(outside) > 1e-2 * work                      # the term the residual would otherwise hold
+    assert e["contact_switched"][k] - e["contact"][k] == pytest.approx(outside, abs=1e-9 * work)
+    assert np.ptp(e["contact"]) > 0 and e["broken"][k] > 0 and e["formed"][k] > 0
+
+
+def test_the_contact_budget_is_rank_invariant_and_survives_a_restart(tmp_path):
+    """The contact's budget on 1 rank, and on 3 ranks for 2 l/c_r continued on 2 ranks from its checkpoint:
+    every /energy dataset the same bits, the residual below 1e-6 of the drive's work (the contacts' running
+    total travels through the checkpoint; each rank counts its own sites' springs)."""
+    from helpers import datasets, require, run_cli, small_toml
+    require("gather")
+    sc = tmp_path / "s.toml"
+    sc.write_text(small_toml(**CONTACT, **{"checkpoint.every": 1.0}))
+    one, split = tmp_path / "one.vtkhdf", tmp_path / "split.vtkhdf"
+    assert run_cli(1, "run", sc, "--out", one, "--no-png", "--quiet").returncode == 0
+    p = run_cli(3, "run", sc, "--out", split, "--no-png", "--quiet", "--set", "drive.duration=2.0", timeout=150)
+    assert p.returncode == 0, p.stderr
+    p = run_cli(2, "run", sc, "--out", split, "--no-png", "--quiet", "--restart", str(split) + ".ckpt.h5", timeout=150)
+    assert p.returncode == 0, p.stderr
+    a, b = datasets(one)[0], datasets(split)[0]
+    names = [n for n in a if n.startswith("energy/")]
+    assert len(names) == 10 and "energy/contact_switched" in names
+    for name in names:
+        assert a[name].tobytes() == b[name].tobytes(), name
+    work = np.max(a["energy/work_drive"])
+    assert np.max(np.abs(a["energy/residual"])) <= 1e-6 * work and np.ptp(a["energy/contact"]) > 0

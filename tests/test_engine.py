@@ -8,6 +8,7 @@ import pytest
 
 from helpers import (SMALL, assert_extension_is_the_run, datasets, reference, require, run_cli, scene, simulation,
                      small_toml)
+from parslip.engine.kernels import budget as bg
 from parslip.engine.kernels import interface as ik
 from parslip.model.interface import PARTNER
 from parslip.errors import NonFiniteError
@@ -183,7 +184,8 @@ def test_a_bond_out_of_reach_is_caught_not_skipped():
     bx, by, tx, ty = s.level(0)
     br = g.brow
     s.iface.reach[0] = -1
-    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], ty[1], bx[br], by[br], s.iface, *np.zeros((2, 2, tx.shape[1])))
+    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], ty[1], bx[br], by[br], s.iface,
+              np.zeros((len(bg.SITE_TERMS), 2, tx.shape[1])))
     assert s.iface.reach[0] == j + g.tbase
 
 

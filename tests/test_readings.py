@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from helpers import SMALL, scene, simulation
+from parslip.engine.kernels import budget as bg
 from parslip.engine.kernels import interface as ik
 from parslip.errors import ConfigError
 from parslip.model.interface import PARTNER
@@ -17,7 +18,8 @@ def _update(sim):
     bx, by, tx, ty = s.level(0)
     g = s.iface.geom
     br = g.brow
-    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], ty[1], bx[br], by[br], s.iface, *np.zeros((2, 2, tx.shape[1])))
+    ik.update(0, tx[1], ty[1], bx[br], by[br], tx[1], ty[1], bx[br], by[br], s.iface,
+              np.zeros((len(bg.SITE_TERMS), 2, tx.shape[1])))
     return s.iface.bonds[PARTNER].astype(np.int64)
 
 

@@ -15,7 +15,7 @@ route 2, ``field_g``        the dynamic mode II singular field fitted to the int
 (``palmer_rice_length``).  ``front_energy`` gives every scalar of one front at once.
 
 The per-front fields (``fronts.FIELDS``: ``parslip fronts --json``, ``front.<name>``), means over the front's
-steady stretch, null where the data is missing: ``G_contour_inner``, ``G_contour_outer`` (route 1, from
+steady stretch (route 1's weighted by the tip's local speed, ``route1_mean``), null where the data is missing: ``G_contour_inner``, ``G_contour_outer`` (route 1, from
 snapshots inside the stretch), ``G_field`` (route 2, from the interface frames), ``Gamma`` and
 ``Gamma_source``.  Each is computed on first use, the routes once per front; route 1 reads a snapshot only
 when its boxes fit in the lattice at the tip, so an ordinary run (sparse snapshots, a thin block) costs
@@ -31,10 +31,11 @@ across the bonds its contour cuts is exact on the lattice,
     F = sum over cut bonds (i in R, j out) of 1/2 f_i . (v_i + v_j),     f_i = K (d(n) + d(n-1)) / 2,
 
 the power the bond delivers to R at step n - 1/2 if R holds half of each cut bond's energy.  For a front
-running steadily at V, the energy in a region fixed in the lab changes as the pattern translates,
+running at V, the energy in a region fixed in the lab changes as the pattern translates,
 dE_R/dt = -V dE/dX, and a lattice column is a symmetry of both lattices, so dE/dX is the centred difference
 of the energy held by R shifted one spacing a forward and back (kinetic 1/2 m v^2 of its nodes, the bonds it
-holds, half of those it cuts).  Then
+holds, half of those it cuts).  V is the tip's local speed at the snapshot (``tip_speed_at``), not the
+stretch's one fitted speed, which would bias every front that speeds up or slows down.  Then
 
     G V = F - dE_R/dt - P_damp,        P_damp = zeta m sum_(i in R) v_i^2   ("absolute" damping, m u'' = f - zeta m u')
 
@@ -43,10 +44,15 @@ block), F taken with each cut bond's whole force and P_damp = sum of beta dv.K d
 of a cut one),
 
 is the energy per unit time the breaks inside R take: G in m c_r^2 / a, an energy per unit length of
-advance.  Only data on the contour enters F and dE/dX: no derivative of a continuum field near the tip.  The
-continuum J = integral of [(W + T) n_x - sigma_ij n_j du_i/dx] ds is the same flux; the lattice sum is used
-because stresses and gradients near a lattice tip are not those of a continuum, while the bond sums are
-exact.  With friction behind the tip (bonds that re-form and break again inside R) F also carries what they
+advance.  So route 1 is a closure check of the bookkeeping: by energy conservation the flux into a contour
+equals what the breaks inside it take (``interface_take`` reads the same from the events), whatever the
+interface's law.  It does not test G = Gamma; route 2, the near-tip field that Svetlizky & Fineberg (Nature
+2014) measure G from, does.  A run with ``interface.contact`` is refused (``route1_blocker``): its contact
+springs are three-node elements a snapshot does not hold, and their switches make and take energy.
+
+Only data on the contour enters F and dE/dX: no derivative of a continuum field near the tip.  The continuum
+J = integral of [(W + T) n_x - sigma_ij n_j du_i/dx] ds is the same flux; the lattice sum is used because
+stresses and gradients near a lattice tip are not those of a continuum, while the bond sums are exact.  With friction behind the tip (bonds that re-form and break again inside R) F also carries what they
 dissipate: the contour at two radii says how much.
 
 Route 1 needs snapshots during the front's steady stretch, and snapshots are spread evenly over the drive.
@@ -405,15 +411,24 @@ def route1_blocker(run) -> tuple | None:
                 "route 1 reads interface bonds from positions, so it needs rest offsets 0 ('zero')")
     if s.get("time.damping", "absolute") not in ("absolute", "bonds"):
         return "time.damping", s["time.damping"], "route 1 subtracts 'absolute' or 'bonds' damping"
+    if s.get("interface.contact", 0.0) > 0:
+        # A contact is a three-node spring a snapshot does not hold (its cells are the bonds), and its switches
+        # on and off make and take energy inside the box (the budget's contact_switched): route 1's flux and
+        # box energy would miss both.
+        return ("interface.contact", s["interface.contact"],
+                "route 1 reads the energy flux through the bonds a snapshot holds, and a contact's force is not "
+                "one of them: it needs interface.contact = 0")
     return None
 
 
 def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
     """Route 1 on every snapshot inside the front's steady stretch (``steady_stretch``): G (m c_r^2 / a) in a
     square of half-side r Lambda about the tip for each r of ``radii``, the tip the front's own at the
-    snapshot (``tip_at``), the box centred on the interface, V the stretch's speed.  Rows {"t" (l/c_r),
-    "x_tip" (l), "V" (c_r), "G" (list, one per radius), "radii" (a), "parts" (``contour_flux``'s dicts,
-    internal units)}.  A snapshot whose largest box leaves the
+    snapshot (``tip_at``), the box centred on the interface, V the tip's local speed there (``tip_speed_at``:
+    the box's energy translates with the tip as it is then, dE/dt = -V dE/dX, and G is the flux per unit of
+    its advance then; the stretch's one fitted speed would bias both wherever the front speeds up or slows
+    down).  Rows {"t" (l/c_r), "x_tip" (l), "V" (c_r, local), "V_stretch" (c_r), "G" (list, one per radius),
+    "radii" (a), "parts" (``contour_flux``'s dicts, internal units)}.  A snapshot whose largest box leaves the
     free part of either block is skipped before it is read, so a run whose blocks are thinner than the boxes
     costs nothing.  A run route 1 cannot read (``route1_blocker``) is refused with one line."""
     from ..io import contract
@@ -441,9 +456,10 @@ def contour_g_run(run, front, radii: tuple = CONTOUR_RADII) -> list[dict]:
         near = np.max(np.abs(geo.ref - centre), axis=1) <= r_max + 2       # only the bonds the boxes reach
         keep = near[bonds["i"]] | near[bonds["j"]]
         bonds = {name: a[keep] for name, a in bonds.items()}
-        parts = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (*centre, r * lam), st["V"] * c_r, zeta)
+        V = float(tip_speed_at(front, t))
+        parts = [contour_flux(geo.ref, p, p - dt * vel, dt, bonds, (*centre, r * lam), V * c_r, zeta)
                  for r in radii]
-        rows.append({"t": t, "x_tip": x_tip, "V": st["V"], "G": [q["G"] / c_r ** 2 for q in parts],
+        rows.append({"t": t, "x_tip": x_tip, "V": V, "V_stretch": st["V"], "G": [q["G"] / c_r ** 2 for q in parts],
                      "radii": [r * lam for r in radii], "parts": parts})
     return rows
 
@@ -452,6 +468,24 @@ def tip_at(front, t) -> np.ndarray:
     """The tip's position x_tip(t) (l) at times t (l/c_r) along its own path: the arrivals (t, x) of
     ``front.tip`` interpolated linearly, so exact at each break and within one site between two."""
     return np.interp(np.asarray(t, float), np.asarray(front.tip["t"], float), np.asarray(front.tip["x"], float))
+
+
+def tip_speed_at(front, t) -> np.ndarray:
+    """The tip's local speed (c_r, signed) at times t (l/c_r): the catalogue's local speeds ``front.tip["v"]``
+    (each fitted over 2 h + 1 sites of the path, ``fronts.Front``) interpolated linearly between the arrivals;
+    a site without a speed (a burst, NaN) is left out.  A front drawn without them (no "v") gets the local
+    slope of its arrivals, the centred difference dx/dt over h sites each side (h = ``fronts.WINDOW``)."""
+    tt, xx = np.asarray(front.tip["t"], float), np.asarray(front.tip["x"], float)
+    v = front.tip.get("v")
+    if v is None:
+        from .fronts import WINDOW
+        n = len(tt)
+        lo, hi = np.maximum(np.arange(n) - WINDOW, 0), np.minimum(np.arange(n) + WINDOW, n - 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            v = (xx[hi] - xx[lo]) / (tt[hi] - tt[lo])
+    v = np.asarray(v, float)
+    ok = np.isfinite(v)
+    return np.interp(np.asarray(t, float), tt[ok], v[ok]) if ok.any() else np.full(np.shape(t), math.nan)
 
 
 def field_g_run(run, front, window: tuple = FIT_WINDOW) -> list[dict]:
@@ -520,42 +554,50 @@ def gamma_run(run, front) -> dict:
     return {"x": np.asarray(front.tip["x"])[sl], "Gamma": g, "source": "frames"}
 
 
-def interface_take(run, front, radii: tuple = CONTOUR_RADII) -> list[float]:
+def interface_take(run, front, radii: tuple = CONTOUR_RADII, net: bool = True) -> list[float]:
     """What the interface takes inside each contour of route 1, per unit advance (m c_r^2 / a), from the events'
-    stored energies: over the steady stretch, the energy of every break minus that of every re-formation whose
-    site lay within r Lambda of the tip (the stretch's fitted line) at its step, over V (t1 - t0).  For a
-    steady front this is route 1's G at that radius by energy conservation, read off the bonds instead of the
-    fields: a check of route 1 that shares none of its data.  NaN without /interface/events/energy."""
+    stored energies: over the steady stretch (t0 to t1), the energy of every break minus that of every
+    re-formation (``net``; False: the breaks alone) whose site lay within r Lambda of the tip at its step, the
+    tip where route 1 centres its boxes (``tip_at``, the front's own path), over the tip's advance from t0 to
+    t1.  By energy conservation this is what route 1's flux at that radius must carry, read off the bonds
+    instead of the fields: a closure check of route 1 that shares none of its data.  NaN without
+    /interface/events/energy."""
     ev = run.events
     if not _has_energy(ev):
         return [math.nan for _ in radii]
     lam, st, l = process_zone(run), steady_stretch(front), float(run.attrs["l"])
     t = np.asarray(ev["time"], float)
     sel = (t >= st["t0"]) & (t <= st["t1"])
-    dist = np.abs((run.x[ev["site"][sel]] - st["x_at"](t[sel])) * l)
+    if not net:
+        sel &= np.asarray(ev["kind"]) == 1
+    dist = np.abs((run.x[ev["site"][sel]] - tip_at(front, t[sel])) * l)
     sign = np.where(ev["kind"][sel] == 1, 1.0, -1.0)
     e = sign * np.asarray(ev["energy"], float)[sel]
-    advance = abs(st["V"]) * (st["t1"] - st["t0"]) * l
-    return [float(e[dist <= r * lam].sum() / advance) for r in radii]
+    advance = abs(float(tip_at(front, st["t1"]) - tip_at(front, st["t0"]))) * l
+    return [float(e[dist <= r * lam].sum() / advance) if advance > 0 else math.nan for r in radii]
 
 
 def front_energy(run, front, radii: tuple = CONTOUR_RADII, window: tuple = FIT_WINDOW) -> dict:
     """The per-front scalars, means over the front's steady stretch: G_contour_inner, G_contour_outer (route 1
-    at the two radii), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
-    snapshots and frames each mean holds (NaN where none); take_inner, take_outer (``interface_take``)."""
-    c = contour_g_run(run, front, radii)
+    at the two radii, ``route1_mean``), G_field (route 2), Gamma (m c_r^2 / a), v (c_r, unsigned), Lambda (a), and how many
+    snapshots and frames each mean holds (NaN where none); take_inner, take_outer (``interface_take``) and
+    breaks_inner, breaks_outer (the same without the re-formations).  Route 1 is empty (NaN) for a run it
+    cannot read (``route1_blocker``)."""
+    c = [] if route1_blocker(run) else contour_g_run(run, front, radii)
     f = field_g_run(run, front, window)
     g = gamma_run(run, front)
     take = interface_take(run, front, radii)
+    breaks = interface_take(run, front, radii, net=False)
 
     def mean(a):
         a = np.asarray(a, float)
         a = a[np.isfinite(a)]
         return float(a.mean()) if len(a) else math.nan
-    return {"G_contour_inner": mean([r["G"][0] for r in c]), "G_contour_outer": mean([r["G"][-1] for r in c]),
+    inner, outer = (math.nan if g is None else g for g in (route1_mean(c, 0), route1_mean(c, -1)))
+    return {"G_contour_inner": inner, "G_contour_outer": outer,
             "G_field": mean([r["G"] for r in f]), "Gamma": mean(g["Gamma"]), "Gamma_source": g["source"],
             "v": abs(steady_stretch(front)["V"]), "Lambda": process_zone(run), "snapshots": len(c), "frames": len(f),
-            "take_inner": take[0], "take_outer": take[-1]}
+            "take_inner": take[0], "take_outer": take[-1], "breaks_inner": breaks[0], "breaks_outer": breaks[-1]}
 
 
 # --- the per-front fields -------------------------------------------------------------------------------------
@@ -584,6 +626,17 @@ def _memo(front, key: str, compute):
     return store[key]
 
 
+def route1_mean(rows: list[dict], k: int) -> float | None:
+    """Route 1's G over a stretch at radius ``k`` of its rows (``contour_g_run``): the energy per unit advance,
+    sum of G_i |V_i| over sum of |V_i| (each snapshot's power over the tip's local speed), None without a row.
+    For a steady front it is the mean of the G_i; for one that pauses, a snapshot in the pause (V near 0,
+    G_i the ratio of two small numbers) weighs as little as the tip advanced then."""
+    g = np.array([r["G"][k] for r in rows], float)
+    w = np.abs(np.array([r["V"] for r in rows], float))
+    ok = np.isfinite(g) & np.isfinite(w)
+    return float(np.sum(g[ok] * w[ok]) / np.sum(w[ok])) if ok.any() and np.sum(w[ok]) > 0 else None
+
+
 def _mean(values) -> float | None:
     """The mean of the finite values, None when there is none."""
     a = np.asarray(values, float)
@@ -599,26 +652,26 @@ def _contour_rows(run, front) -> list[dict]:
     return _memo(front, "contour", lambda: contour_g_run(run, front))
 
 
-ROUTE1_DOC = ("mean over the snapshots inside the front's steady stretch (the middle 60 % of its sites): null "
-              "without such a snapshot (write them by a restart with a dense output.snapshots cadence: "
-              "docs/guide/analysis.md, G and Gamma), where the box leaves the free lattice (a block thinner "
-              "than the box), or for a run route 1 cannot read (rigid substrate, interface.reform_x0 other than "
-              "zero)")
+ROUTE1_DOC = ("over the snapshots inside the front's steady stretch (the middle 60 % of its sites), with the "
+              "tip's local speed at each, weighted by it (energy per unit advance: route1_mean): null without such a snapshot (write them by a restart with a "
+              "dense output.snapshots cadence: docs/guide/analysis.md, G and Gamma), where the box leaves the "
+              "free lattice (a block thinner than the box), or for a run route 1 cannot read (rigid substrate, "
+              "interface.reform_x0 other than zero, interface.contact > 0: route1_blocker)")
 
 
 @front_field("G_contour_inner", "m c_r^2/a", "G by route 1 (analysis.cracks): the energy flux into a lattice "
              f"square of half-side {CONTOUR_RADII[0]:g} Lambda about the tip per unit advance (Lambda the "
              "Palmer-Rice process zone), " + ROUTE1_DOC)
 def g_contour_inner(run, front) -> float | None:
-    """Route 1's G at the inner radius (``contour_g_run``), mean over the stretch's snapshots."""
-    return _mean([r["G"][0] for r in _contour_rows(run, front)])
+    """Route 1's G at the inner radius (``contour_g_run``) over the stretch's snapshots (``route1_mean``)."""
+    return route1_mean(_contour_rows(run, front), 0)
 
 
 @front_field("G_contour_outer", "m c_r^2/a", f"the same at {CONTOUR_RADII[-1]:g} Lambda: inner and outer agree "
              "where what the interface dissipates between them (re-formed bonds breaking again) is small")
 def g_contour_outer(run, front) -> float | None:
-    """Route 1's G at the outer radius (``contour_g_run``), mean over the stretch's snapshots."""
-    return _mean([r["G"][-1] for r in _contour_rows(run, front)])
+    """Route 1's G at the outer radius (``contour_g_run``) over the stretch's snapshots (``route1_mean``)."""
+    return route1_mean(_contour_rows(run, front), -1)
 
 
 @front_field("G_field", "m c_r^2/a", "G by route 2 (analysis.cracks): G = H(v) K_II^2 / 2 (H the Born "

@@ -31,8 +31,9 @@ from ..io.contract import EVENT_BREAK
 from ..model.physics import DENSITY
 from .fronts import Front, front_field, wave_speeds
 
-# S above which a 2D crack transitions to supershear (Andrews 1976; Burridge 1973): tau_peak - tau_0 below
-# 1.77 (tau_0 - tau_res).
+# The S below which a 2D slip-weakening crack can turn supershear and above which it never does, Andrews'
+# (1985) limit (his 1976 paper found the transition; Burridge 1973 the intersonic stress peak):
+# tau_peak - tau_0 below 1.77 (tau_0 - tau_res).
 ANDREWS_S_2D = 1.77
 
 

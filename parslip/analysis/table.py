@@ -191,6 +191,13 @@ def _number(text: str):
     return text
 
 
+def read_rows(path: str) -> list[dict]:
+    """A table this package wrote (``write_csv``: a study's CSV, a sweep's summary) as a list of rows, numbers
+    typed as ``read`` types them (the columns of ``WORDS`` kept as text)."""
+    with open(path, newline="") as fh:
+        return [{c: (v if c in WORDS else _number(v)) for c, v in r.items()} for r in csv.DictReader(fh)]
+
+
 def read(path: str) -> dict[str, list]:
     """A summary table (CSV, or netCDF through xarray) as {column: list of values}; numbers typed.
 

@@ -76,7 +76,8 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy ste
 # make (``kernels.exact``: the damping since the drive started; the kinetic and bulk elastic energy of the
 # last step that ended on a frame); work per driven slot, an array [2, slots] of float pairs (hi, lo); sites
 # [row, 2, site], the running totals per interface site (local column of the block's interface row), one row
-# of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the weakening); base [2, N_TERMS]:
+# of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the contacts' switches, the weakening);
+# base [2, N_TERMS]:
 # what a restart carried over (rank 0); prev [2, slots]: each driven slot's u(n-1) (x, y); scale [N_Q]: each
 # exact sum's quanta per m c^2 (``kernels.exact.scales``); cs: the kernels' factors with them,
 # [zeta/(4 dt) S_damp, -S_damp/(2 C), S_kin/(2 dt^2), -S_el/(2 C)] (``stencil.budget_shares``).
@@ -438,9 +439,9 @@ def _budget_start(cur, old, drive, bud):
 @njit(cache=True, _nrt=False)
 def _energies(n, cur, old, sched, prm, iface, bud, out):
     """This rank's share of the budget at a frame (``kernels.budget``), out[:, term]: the float pairs in rows
-    0-1 (the running totals with what a restart carried over, the interface bonds' staggered energy, the
-    load's sum), the kernels' exact sums in rows 2-4 (the damping; the kinetic and bulk elastic energy the
-    step that ended here left)."""
+    0-1 (the running totals with what a restart carried over, the interface bonds' and the contact springs'
+    staggered energy, the load's sum), the kernels' exact sums in rows 2-4 (the damping; the kinetic and bulk
+    elastic energy the step that ended here left)."""
     out[:, :] = 0.0
     bg.total(bud.work, out, bg.W_DRIVE)
     for k in range(len(bg.SITE_TERMS)):
@@ -460,6 +461,9 @@ def _energies(n, cur, old, sched, prm, iface, bud, out):
         br = prm.brow
         ik.staggered(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
                      old.by[br], iface, out)
+        if iface.rules.contact > 0:
+            ik.contact_staggered(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD],
+                                 old.bx[br], old.by[br], iface, out)
 
 
 @njit(cache=True, _nrt=False)

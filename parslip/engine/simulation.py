@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
+from ..io.contract import ENERGY_SINKS, ENERGY_SOURCES
 from ..model.interface import BONDS, NEVER
 from ..model.lattice import TOP
 from ..parallel.exchange import build_plan
@@ -328,8 +329,9 @@ class Simulation:
         return [x] if self.comm is None else self.comm.gather(x, root=0)
 
     def budget_frames(self, count: int) -> dict | None:
-        """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started:
-        work_drive + work_normal + formed = elastic + kinetic + damping + broken + residual (contract
+        """Rank 0: the energy budget of the ``count`` frames held (m c_r^2), since the drive started: the
+        sources (contract ``ENERGY_SOURCES``: work_drive, work_normal, formed, contact_switched) equal the
+        sinks (``ENERGY_SINKS``: elastic, kinetic, contact, damping, broken) plus the residual (contract
         ``ENERGY_DATASETS``); collective.  The damping is summed in the loop with ``output.energy =
         "checked"`` and the body drag, else it is the balance and the residual NaN.  The state's terms at the drive's start come from its frame
         (or from the checkpoint a run continues); without them (a checkpoint that predates the budget)
@@ -340,16 +342,17 @@ class Simulation:
             return None
         tot = self._pairs(parts)
         if self.energy_base is None and fr.cursor[L.C_BASE] == 0 and fr.step[0] == self.setup.n_drive_start:
-            self.energy_base = tot[0, [bg.KINETIC, bg.ELASTIC, bg.LOAD_Y]].copy()
-        base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+            self.energy_base = tot[0, list(bg.STATE)].copy()
+        base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
         e = 1.0 / self.setup.material.c_r ** 2
+        change = {term: (tot[:, term] - base[k]) * e for k, term in enumerate(bg.STATE) if term != bg.LOAD_Y}
         out = {"work_drive": tot[:, bg.W_DRIVE] * e, "damping": tot[:, bg.DAMPING] * e,
                "broken": tot[:, bg.BROKEN] * e, "formed": tot[:, bg.FORMED] * e,
-               "kinetic": (tot[:, bg.KINETIC] - base[0]) * e, "elastic": (tot[:, bg.ELASTIC] - base[1]) * e,
-               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[2]) * e,
+               "kinetic": change[bg.KINETIC], "elastic": change[bg.ELASTIC],
+               "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[bg.STATE.index(bg.LOAD_Y)]) * e,
+               "contact": change[bg.CONTACT], "contact_switched": tot[:, bg.SWITCHED] * e,
                "softening": tot[:, bg.SOFTENED] * e}
-        balance = (out["work_drive"] + out["work_normal"] + out["formed"]
-                   - (out["elastic"] + out["kinetic"] + out["broken"] + out["softening"]))
+        balance = sum(out[k] for k in ENERGY_SOURCES) - sum(out[k] for k in ENERGY_SINKS if k != "damping")
         if self.params.drag or self.setup.damping.zeta == 0:
             out["residual"] = balance - out["damping"]
         else:
@@ -380,7 +383,7 @@ class Simulation:
             hi = np.array([math.fsum(stack[:, :, t].ravel()) for t in range(bg.N_TERMS)])
             lo = np.array([math.fsum(list(stack[:, :, t].ravel()) + [-hi[t]]) for t in range(bg.N_TERMS)])
             totals = [sum(p[1][q] for p in parts) for q in range(bg.N_Q)]      # exact, in quanta
-            base = self.energy_base if self.energy_base is not None else np.full(3, np.nan)
+            base = self.energy_base if self.energy_base is not None else np.full(len(bg.STATE), np.nan)
             attrs = {"energy_totals": np.array([hi, lo]), "energy_base": np.asarray(base, np.float64),
                      "energy_quanta": np.array([[t >> bg.WORD, t & ((1 << bg.WORD) - 1)] for t in totals],
                                                np.int64)}
@@ -393,20 +396,24 @@ class Simulation:
         b.base[:] = 0.0
         b.acc[:] = 0
         if self.rank == 0:
-            b.base[:] = np.nan if tot is None else self._later_terms(tot)
+            b.base[:] = np.nan if tot is None else self._later_terms(tot, range(bg.N_TERMS))
             if tot is not None:
                 b.acc[:] = np.asarray(attrs["energy_quanta"], np.int64)
+            # None where not known yet (a checkpoint before the drive's start): the drive's first frame gives it.
             base = attrs.get("energy_base")
-            self.energy_base = None if base is None or not np.all(np.isfinite(base)) else np.asarray(base)
+            known = base is not None and not np.isnan(base).all()
+            self.energy_base = self._later_terms(np.asarray(base)[None], bg.STATE)[0] if known else None
         u_prev = s.owned_u(self.n - 1)
         b.prev[:] = u_prev[np.searchsorted(s.gid, s.driven_gid)].T
 
-    @staticmethod
-    def _later_terms(values) -> np.ndarray:
-        """A checkpoint's running totals ([2, terms]) padded with zeros to ``N_TERMS`` terms: a checkpoint
-        written before a term existed (the weakening's) carries none, and its run had none."""
+    def _later_terms(self, values, terms) -> np.ndarray:
+        """A checkpoint's budget terms ([rows, terms]) padded to the terms ``terms`` (their indices, in order): a
+        checkpoint written before a term existed carries none.  The contact's terms are 0 without a contact
+        and unknown (NaN) with one; the weakening's 0 (a checkpoint before it had no weakening)."""
         values = np.asarray(values, np.float64)
-        return np.concatenate([values, np.zeros((values.shape[0], bg.N_TERMS - values.shape[1]))], axis=1)
+        terms = list(terms)[values.shape[1]:]
+        fill = [np.nan if self.setup.law.contact and t in (bg.CONTACT, bg.SWITCHED) else 0.0 for t in terms]
+        return np.concatenate([values, np.tile(np.asarray(fill, np.float64), (values.shape[0], 1))], axis=1)
 
     def checkpoint_attrs(self) -> dict:
         """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""

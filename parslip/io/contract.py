@@ -108,9 +108,12 @@ EVENT_DATASETS = {
 
 # The energy budget: /energy/<name>, one value per interface frame (m c_r^2), in damped Verlet's discrete
 # energy (``engine.kernels.budget``): the state's terms as their change since the drive started, the works
-# and losses as their totals since then, so that
-#     work_drive + work_normal + formed = elastic + kinetic + damping + broken + softening + residual.
+# and losses as their totals since then, so that the sources equal the sinks plus the residual:
+#     work_drive + work_normal + formed + contact_switched
+#         = elastic + kinetic + contact + damping + broken + softening + residual.
 ENERGY = "energy"
+ENERGY_SOURCES = ("work_drive", "work_normal", "formed", "contact_switched")
+ENERGY_SINKS = ("elastic", "kinetic", "contact", "damping", "broken", "softening")
 ENERGY_DATASETS = {
     "work_drive": "the drive's work on the driven nodes, sum over steps of f . (u(n+1) - u(n-1))/2",
     "work_normal": "the normal load's work on the top face, the same sum",
@@ -120,6 +123,13 @@ ENERGY_DATASETS = {
                "or the bonds' dashpots' work (\"bonds\")",
     "broken": "the staggered energy of each bond at the step it broke, summed",
     "formed": "the staggered energy of each bond at the step it re-formed, summed (with its new rest offset)",
+    "contact": "change of the contact springs' staggered energy 1/2 k_c s(n-1) s(n) (interface.contact; s the "
+               "compression delta0 - d of a free site's spring, set up from u(n-1)); 0 without contact",
+    "contact_switched": "what the contact springs' switches added: each step sets up a free site's spring anew "
+                        "from u(n) (its surface, normal and weight), so per step and site the new spring's "
+                        "staggered energy at (u(n-1), u(n)) less the old one's, summed (a site that gains or "
+                        "loses its contact, by a break, a re-formation or d crossing delta0, has one of the two); "
+                        "0 without contact",
     "softening": "the energy the bonds' weakening took (interface.softening): per step and weakening bond, "
                  "1/2 (k(n-1) - k(n)) s(n-1) s(n) with k its secant shear stiffness and s = x_ij - x0, summed; "
                  "0 without weakening",
@@ -137,7 +147,8 @@ def read_energy(path: str) -> dict | None:
         if g is None:
             return None
         n = int(f[INTERFACE].attrs.get("frames_written", g["residual"].shape[0]))
-        # A term the file predates reads NaN (its residual holds it, if the run had one).
+        # A term the file predates (the contact's, the weakening's) reads NaN: its residual holds it, if the run
+        # had one.
         out = {name: g[name][:n] if name in g else np.full(n, np.nan) for name in ENERGY_DATASETS}
         out["time"] = f[INTERFACE]["time"][:n]
         return out

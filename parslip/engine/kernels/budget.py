@@ -13,15 +13,31 @@ changes it by exactly
     - zeta |u(n+1) - u(n-1)|^2 / (4 dt)             the body drag ("absolute"), per node
     + 1/2 [C F(z) - C F(u)] . (u(n+1) - u(n-1)) / C the bonds' dashpots ("bonds": z - u = g (u(n) - u(n-1)))
     - the staggered energy of the bonds the step broke, + that of those it re-formed
+    - the staggered energy of the contact springs the step switched off, + that of those it switched on
     - 1/2 (k(n-1) - k(n)) s(n-1) s(n) of each weakening bond, whose shear stiffness the step lowered
       (``interface.softening``: a bond of stiffness k(n) in step n is a spring re-formed each step)
 
-(``tests/test_energy_budget.py`` proves these forms from outside the engine).  The loop adds the
-per-step terms as they happen, each to a running total of its own unit (the damping to a column of
-its block, the drive's work to a driven node, breaks, re-formations and the bonds' weakening to an
-interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
-(``loop._energies``).  A new interface term is one more index below, one more row of ``SITE_TERMS`` if it
-is a running total per site, and one more dataset of ``io.contract.ENERGY_DATASETS``.
+(``tests/test_energy_budget.py`` proves these forms from outside the engine).
+
+The contact (``interface.contact``).  A free site's contact force at step n, f = k_c (delta0 - d) n on the
+top node and -(1 - w) f, -w f on the substrate sites q, q + 1 (``kernels.interface._contacts``), is that of
+a linear spring whose geometry (q, the normal n, the weight w) is read off u(n): its compression
+s(u) = delta0 - n . (r(u) - w e(u)) is affine in the three nodes' displacements and equals delta0 - d at
+u(n), and f = -grad 1/2 k_c s^2 exactly (w clipped or not).  So each step sets up a contact spring from
+u(n), as if the step re-formed it, and the budget counts it the way it counts an interface bond: its
+staggered energy 1/2 k_c s(u(n-1)) s(u(n)) is part of H (the term CONTACT), and a step that replaces the
+springs of u(n-1) by those of u(n) adds, per site, the new spring's staggered energy at (u(n-1), u(n)) less
+the old one's (the term SWITCHED).  Where a site gains or loses its contact (its bond breaks or re-forms, d
+crosses delta0) one of the two is absent; where it keeps it, their difference is what the surface's
+turning and the site's sliding along it change, and what a change of segment (a kink of the surface)
+makes appear or vanish.  The one-sided spring's own energy 1/2 k_c (delta0 - d)^2 is continuous at d =
+delta0; its staggered form is not, by O(k_c s ds).
+
+The loop adds the per-step terms as they happen, each to a running total of its own unit (the damping to
+a column of its block, the drive's work to a driven node, breaks, re-formations, the contacts' switches
+and the bonds' weakening to an interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
+(``loop._energies``).  A new interface term (friction, softening) is one more index below, one more row of
+``SITE_TERMS`` if it is a running total per site, and one more dataset of ``io.contract.ENERGY_DATASETS``.
 
 Rank invariance.  A column's nodes are updated by tasks whose order depends on the rank count, so a
 plain running sum would round differently on 1 and 3 ranks.  Every total is therefore a pair of
@@ -44,14 +60,18 @@ HI, LO = 0, 1
 #   LOAD_Y                             sum over the loaded nodes of u_y(n) + u_y(n-1) (a): the load's work
 #                                      since the drive started is f_N/2 times its change (F_N is constant
 #                                      by then, so sum_m f (u(m+1) - u(m-1))/2 telescopes)
+#   CONTACT                            the contact springs' staggered energy at the frame's step n (m c^2)
+#   SWITCHED                           total since the drive started of what the contacts' switches added
 #   SOFTENED                           total since the drive started of what the bonds' weakening took
-W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, SOFTENED = range(8)
-N_TERMS = 8
-RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SOFTENED)
+W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, CONTACT, SWITCHED, SOFTENED = range(10)
+N_TERMS = 10
+RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SWITCHED, SOFTENED)
+# The state's terms, written as their change since the drive started (their values there: ``STATE``'s order).
+STATE = (KINETIC, ELASTIC, LOAD_Y, CONTACT)
 # The running totals kept per interface site (local column of the block's interface row), the rows of
 # ``loop.Budget.sites`` [row, HI|LO, site]: row S_BROKEN holds term SITE_TERMS[S_BROKEN], and so on.
-SITE_TERMS = (BROKEN, FORMED, SOFTENED)
-S_BROKEN, S_FORMED, S_SOFTENED = range(3)
+SITE_TERMS = (BROKEN, FORMED, SWITCHED, SOFTENED)
+S_BROKEN, S_FORMED, S_SWITCHED, S_SOFTENED = range(4)
 
 # Bond masks of the row kinds (``parallel.layout``): FULL, NO_UP (top row), NO_DOWN (bottom row).
 ALL = R_ | UR_ | UL_ | L_ | DL_ | DR_
@@ -110,3 +130,9 @@ def bond_energy(kx, ky, sx0, sy0, sx1, sy1):
     """An interface bond's staggered energy 1/2 [k_x s_x(n-1) s_x(n) + k_y s_y(n-1) s_y(n)], s its stretch
     (x_ij - x0, y_ij - delta0) at the two levels."""
     return 0.5 * (float(kx) * float(sx0) * float(sx1) + float(ky) * float(sy0) * float(sy1))
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def contact_energy(kc, s0, s1):
+    """A contact spring's staggered energy 1/2 k_c s(n-1) s(n), s its compression at the two levels (a)."""
+    return 0.5 * float(kc) * float(s0) * float(s1)

@@ -24,7 +24,9 @@ and the opposite force on the bottom node.  Each step, at positions u(t):
    other waits a step; a re-formed bond takes its rest offset by the rule
    ``_rest_offset`` (0, or x_ij: unstressed in x);
 4. with a contact stiffness (``interface.contact``), each site still free
-   is pushed off the substrate's surface (``_contacts``).
+   is pushed off the substrate's surface (``_contacts``); the energy budget
+   counts each step's contact springs as springs the step re-formed
+   (``kernels.budget``: ``_contacts_left`` takes off those of the step before).
 
 The law's parameters and rule codes come from ``model.interface``; each rule
 is one inlined function below, chosen by its code.
@@ -239,13 +241,15 @@ def _event(it, n, j, site, kind, q, dx, dy, kx, spent):
 
 @njit(cache=True, _nrt=False)
 def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites):
-    """Steps 1-3 above on every local top site at step ``n``, then the bond forces at u(t).
+    """Steps 1-4 above on every local top site at step ``n``, then the bond forces at u(t).
 
     tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row; the *_prev: the same at
     u(t - dt), for rules that read the slip velocity and for the budget (``kernels.budget``, pairs by local
-    top column in the rows of ``sites``): each break of an OWNED site adds the bond's staggered energy
+    top column in ``sites``' rows): each break of an OWNED site adds the bond's staggered energy
     (``kernels.budget.bond_energy``) to row S_BROKEN, each re-formation to S_FORMED, each step of a weakening
-    bond what its weakening took to S_SOFTENED (``_soften``).  ``partner`` holds global
+    bond what its weakening took to S_SOFTENED (``_soften``); with a contact, each OWNED site adds the
+    staggered energy of its contact spring of this step to S_SWITCHED and takes off that of the step before.
+    ``partner`` holds global
     bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
     (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
     there is no bond.  ``claim`` is scratch: the free sites, then their claims.  Every break and
@@ -255,13 +259,16 @@ def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites):
     window reaches past this rank's substrate copies (a bond out of reach), else stays -1.
     """
     zero = like(0, it.rules.delta0)
+    contact = it.rules.contact > zero
+    if contact:                                   # before the breaks: the sites free since the step before
+        _contacts_left(tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites[bg.S_SWITCHED])
     _clear(it, zero)
     nfree = _breaks(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, sites[bg.S_BROKEN],
                     sites[bg.S_SOFTENED])
     _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero)
     _grants(n, nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, sites[bg.S_FORMED])
-    if it.rules.contact > zero:
-        _contacts(nfree, tx, ty, bx, by, it)
+    if contact:
+        _contacts(nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites[bg.S_SWITCHED])
 
 
 @njit(cache=True, _nrt=False)
@@ -426,15 +433,85 @@ def _grants(n, nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, formed):
                                               bonds, kx))
 
 
+# What ``_surface`` returns for a site with no surface under it (beyond the substrate's ends), and for one
+# whose segment is not stored on this rank (out of the halo's reach).
+NO_SURFACE, FAR = -1, -2
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _surface(gl, j, tx, ty, bx, by, g, d0):
+    """The substrate's surface under top site j (global column ``gl``) at the positions given
+    (``model.interface``): (i, nx, ny, w, d), i the local column of the segment's first substrate site (the
+    pair that brackets the site's x, as the sites have drifted), (nx, ny) its upward unit normal, w the
+    site's weight along it (clipped to [0, 1]) and d the site's height above it (a); i = NO_SURFACE beyond
+    the substrate's ends, FAR where the segment is not stored here."""
+    one = like(1, d0)
+    nil = 0 * one
+    x = like(gl, d0) + tx[j]                              # the site's x, in substrate columns
+    q = np.int64(np.floor(x))
+    if q < 0 or q + 1 >= g.bcols:
+        return NO_SURFACE, nil, nil, nil, nil             # beyond the substrate's ends: no surface
+    i = q - g.bbase
+    if i - 1 < g.blo or i + 2 > g.bhi:
+        return FAR, nil, nil, nil, nil
+    if x < q + bx[i]:                                     # the bracketing pair, as the sites have drifted
+        i -= 1
+    elif x >= q + 1 + bx[i + 1]:
+        i += 1
+    ex, ey = one + (bx[i + 1] - bx[i]), by[i + 1] - by[i]
+    rx, ry = like(gl - (i + g.bbase), d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
+    ln = np.sqrt(ex * ex + ey * ey)
+    nx, ny = -ey / ln, ex / ln
+    d = rx * nx + ry * ny
+    w = min(max((rx * ex + ry * ey) / (ln * ln), nil), one)
+    return i, nx, ny, w, d
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
+    """The compression delta0 - n . (r - w e) (a, float64) of the contact spring (i, n, w) of top site j at the
+    positions given: affine in the three nodes' displacements, delta0 - d where the spring was set up."""
+    rx = float(gl - (i + bbase)) + (float(tx[j]) - float(bx[i]))
+    ry = float(d0) + (float(ty[j]) - float(by[i]))
+    ex = 1.0 + (float(bx[i + 1]) - float(bx[i]))
+    ey = float(by[i + 1]) - float(by[i])
+    w = float(w)
+    return float(d0) - (float(nx) * (rx - w * ex) + float(ny) * (ry - w * ey))
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it):
+    """The staggered energy (``kernels.budget.contact_energy``) at (u(n-1), u(n)) of the contact spring free
+    site j had in the step before, set up from u(n-1) (the *p arrays); 0 where it had none."""
+    g, d0 = it.geom, it.rules.delta0
+    gl = j + g.tbase
+    i, nx, ny, w, d = _surface(gl, j, txp, typ, bxp, byp, g, d0)
+    if i < 0 or d >= d0:
+        return 0.0
+    return bg.contact_energy(it.rules.contact, d0 - d, _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, g.bbase, d0))
+
+
 @njit(cache=True, _nrt=False)
-def _contacts(nfree, tx, ty, bx, by, it):
+def _contacts_left(tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
+    """Each OWNED site free since the step before (partner -1 before the breaks) takes the staggered energy of
+    its contact spring of that step off ``switched``: this step replaces the spring (``_contacts``)."""
+    g, bonds = it.geom, it.bonds
+    for j in range(g.town0, g.town1):
+        if _partner(bonds, j) < 0:
+            e = _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it)
+            if e != 0.0:
+                bg.add(switched, j, -e)
+
+
+@njit(cache=True, _nrt=False)
+def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
     """4. Contact: each site still free after the grants, in increasing site order, is pushed off the
-    substrate's surface (``model.interface``: the segment between the two substrate sites that bracket its
-    current x) by f = k_c (delta0 - d) along the segment's normal when its distance d is below delta0; the
-    opposite force goes to the segment's ends by the interpolation weights (1 - w, w).  A substrate site
-    gathers the contacts of the sites around it in site order, after its bond's force."""
+    substrate's surface (``_surface``) by f = k_c (delta0 - d) along the segment's normal when its distance
+    d is below delta0; the opposite force goes to the segment's ends by the interpolation weights (1 - w,
+    w).  A substrate site gathers the contacts of the sites around it in site order, after its bond's force.
+    Each OWNED site in contact adds its spring's staggered energy at (u(n-1), u(n)) to ``switched``."""
     g, p, claim, reach = it.geom, it.rules, it.claim, it.reach
-    tbase, bbase, thi, d0, kc = g.tbase, g.bbase, g.thi, p.delta0, p.contact
+    tbase, thi, d0, kc = g.tbase, g.thi, p.delta0, p.contact
     one = like(1, d0)
     for m in range(nfree):
         c = claim[m]
@@ -442,31 +519,18 @@ def _contacts(nfree, tx, ty, bx, by, it):
         if _partner(it.bonds, j) >= 0:
             continue
         gl = j + tbase
-        x = like(gl, d0) + tx[j]                              # the site's x, in substrate columns
-        q = np.int64(np.floor(x))
-        if q < 0 or q + 1 >= g.bcols:
-            continue                                          # beyond the substrate's ends: no surface
-        i = q - bbase
-        if i - 1 < g.blo or i + 2 > g.bhi:
-            if g.town0 <= j < g.town1 and reach[0] < 0:
-                reach[0] = gl
+        own = g.town0 <= j < g.town1
+        i, nx, ny, w, d = _surface(gl, j, tx, ty, bx, by, g, d0)
+        if i == FAR and own and reach[0] < 0:
+            reach[0] = gl
+        if i < 0 or d >= d0:
             continue
-        if x < q + bx[i]:                                     # the bracketing pair, as the sites have drifted
-            i -= 1
-        elif x >= q + 1 + bx[i + 1]:
-            i += 1
-        ex, ey = one + (bx[i + 1] - bx[i]), by[i + 1] - by[i]
-        rx, ry = like(gl - (i + bbase), d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
-        ln = np.sqrt(ex * ex + ey * ey)
-        nx, ny = -ey / ln, ex / ln
-        d = rx * nx + ry * ny
-        if d >= d0:
-            continue
-        w = min(max((rx * ex + ry * ey) / (ln * ln), 0 * one), one)
         f = kc * (d0 - d)
-        if g.town0 <= j < g.town1:
+        if own:
             it.ext_x[j] = f * nx
             it.ext_y[j] = f * ny
+            bg.add(switched, j, bg.contact_energy(kc, _compression(gl, j, i, nx, ny, w, txp, typ, bxp, byp, g.bbase,
+                                                                   d0), d0 - d))
         if g.bown0 <= i < g.bown1:
             it.exb_x[i] -= (one - w) * f * nx
             it.exb_y[i] -= (one - w) * f * ny
@@ -552,6 +616,16 @@ def staggered(n, tx, ty, bx, by, txp, typ, bxp, byp, it, out):
             dxp, dyp = _gap(gl, q, txp, typ, bxp, byp, j, i, d0)
             kx = _shear_k(p, bonds, j, gl - g.tfirst, n - 1, dxp - bonds[X0, j], dyp)
             bg.add(out, bg.ELASTIC, _staggered_bond(gl, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds, kx))
+
+
+@njit(cache=True, _nrt=False)
+def contact_staggered(tx, ty, bx, by, txp, typ, bxp, byp, it, out):
+    """out[CONTACT] += the staggered energy of the contact spring of every OWNED free top site
+    (``kernels.budget``), the springs of the step before (set up from u(n-1), the *p arrays)."""
+    g, bonds = it.geom, it.bonds
+    for j in range(g.town0, g.town1):
+        if _partner(bonds, j) < 0:
+            bg.add(out, bg.CONTACT, _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it))
 
 
 @njit(cache=True, _nrt=False)

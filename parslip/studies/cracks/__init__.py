@@ -23,6 +23,8 @@ from parslip.analysis import table
 from parslip.analysis.results import Run
 
 STUDIES = ("energy", "precursors", "supershear", "healing")
+# The studies whose tables can be fitted again without their runs (``refit(tables, img)`` in their module).
+REFIT = ("precursors",)
 
 
 def sweeps(runs: str, study: str) -> list[str]:
@@ -58,10 +60,21 @@ def tabulate(study: str, runs: str, img: str, tables: str) -> str:
     """Run study ``study``'s tabulation (see the module docstring)."""
     if study not in STUDIES:
         raise ValueError(f"study {study!r}: accepted: {', '.join(STUDIES)}")
+    return _made(study, img, tables, lambda mod: mod.tabulate(runs, img, tables))
+
+
+def refit(study: str, img: str, tables: str) -> str:
+    """Study ``study``'s fits again from its tables under ``tables``, without its runs (``REFIT``)."""
+    if study not in REFIT:
+        raise ValueError(f"study {study!r}: accepted: {', '.join(REFIT)}")
+    return _made(study, img, tables, lambda mod: mod.refit(tables, img))
+
+
+def _made(study: str, img: str, tables: str, make) -> str:
+    """``make(module)`` for the study's module, into ``img`` and ``tables``; the PDFs it leaves removed."""
     os.makedirs(img, exist_ok=True)
     os.makedirs(tables, exist_ok=True)
-    mod = importlib.import_module(f"parslip.studies.cracks.{study}")
-    md = mod.tabulate(runs, img, tables)
+    md = make(importlib.import_module(f"parslip.studies.cracks.{study}"))
     # The page shows the PNGs; ``save`` also writes PDFs, which the docs do not keep.
     for f in glob.glob(os.path.join(img, f"cracks_{study}_*.pdf")):
         os.remove(f)

@@ -4,11 +4,13 @@
 A row per front that has a steady stretch (``cracks.measurable``) in every run of the sweeps
 ``run/studies/cracks_energy*.toml``: its speed v over the stretch (c_r, and over the lattice's c_R), its band,
 route 1's G at the two contours (``G_contour_inner``, ``G_contour_outer``), route 2's (``G_field``), Gamma
-(m c_r^2 / a), G/Gamma by route 1 (the inner contour), the routes' ratio (route 1 over route 2), the contours'
-ratio, and what decides whether route 2 can be read: each block's height in process zones
-(``height_lambda``; ``cracks.field_resolved`` asks for ``cracks.FIELD_HEIGHT``).  Route 2 is computed on
-every front (``cracks.front_energy``) so that the runs on blocks too short for it show by how much it falls
-short; ``field_resolved`` says which rows the routes' comparison may use.
+(m c_r^2 / a), the longest pause of its tip over the stretch (``longest_pause``: whether it ran or stopped and
+started again), what the interface takes inside each contour by the events (``cracks.interface_take``: net of
+the re-formations, ``take_*``, and the breaks alone, ``breaks_*``), G/Gamma by route 1 (the inner contour), the
+routes' ratio (route 1 over route 2), the contours' ratio, and what decides whether route 2 can be read: each
+block's height in process zones (``height_lambda``; ``cracks.field_resolved`` asks for ``cracks.FIELD_HEIGHT``).
+Route 2 is computed on every front (``cracks.front_energy``) so that the runs on blocks too short for it show
+by how much it falls short; ``field_resolved`` says which rows the routes' comparison may use.
 """
 from __future__ import annotations
 
@@ -24,17 +26,26 @@ from parslip.studies.cracks import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "run", "front", "first", "t_nuc", "x_nuc", "damping", "zeta", "kx", "FN", "v0", "top_rows",
         "bottom_kn", "bottom_kt", "height_lambda", "Lambda", "v", "v_over_cR", "band", "G_contour_inner",
-        "G_contour_outer", "G_field", "Gamma", "take_inner", "take_outer", "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio",
-        "contours_ratio", "route1_ok", "field_resolved", "snapshots", "frames"]
+        "G_contour_outer", "G_field", "Gamma", "take_inner", "take_outer", "breaks_inner", "breaks_outer",
+        "G_over_Gamma", "G_field_over_Gamma", "G_routes_ratio", "contours_ratio", "route1_ok", "field_resolved",
+        "longest_pause", "snapshots", "frames"]
 # What the page's table shows (the CSV holds every column).
 SHOWN = ["sweep", "point", "front", "damping", "zeta", "kx", "height_lambda", "v_over_cR", "Gamma", "G_over_Gamma",
-         "G_field_over_Gamma", "G_routes_ratio", "contours_ratio"]
+         "G_field_over_Gamma", "G_routes_ratio", "contours_ratio", "longest_pause"]
 # The routes agree within this share (issue 27's target); route 1 is read where its two contours agree within
 # CONTOURS (issue 26's target: what the interface dissipates between them is small); fronts slower than
 # SLOWEST c_R are below the study's range.
 AGREE = 0.15
 CONTOURS = 0.10
 SLOWEST = 0.1
+# A front whose tip pauses over more than this share of its stretch (``longest_pause``) stops and starts again:
+# its stretch has no speed, and the figures and the summary leave it out.
+STOP_GO = 0.1
+
+
+def ran(r: dict) -> bool:
+    """Whether a row's front ran over its stretch (no pause longer than ``STOP_GO`` of it)."""
+    return bool(r["longest_pause"] <= STOP_GO)
 
 
 def height_lambda(run) -> float:
@@ -42,6 +53,16 @@ def height_lambda(run) -> float:
     s = run.scene
     rows = min(s["lattice.top_rows"], s["lattice.bottom_rows"])
     return rows * math.sqrt(3.0) / 2.0 / gmeasures.process_zone(run)
+
+
+def longest_pause(front) -> float:
+    """The longest time between two successive arrivals of the tip over the front's steady stretch, as a share
+    of the stretch's duration: a few hundredths for a front that runs, most of it for one that stops and
+    starts again (its stretch's fitted speed is then no speed the tip ever had)."""
+    st = gmeasures.steady_stretch(front)
+    tt = np.asarray(front.tip["t"], float)[st["lo"]:st["hi"]]
+    span = st["t1"] - st["t0"]
+    return float(np.max(np.diff(tt)) / span) if len(tt) > 1 and span > 0 else math.nan
 
 
 def _ratio(a: float, b: float) -> float:
@@ -62,11 +83,13 @@ def front_row(sweep: str, row: dict, run, k: int, front) -> dict:
             "band": front.band or "-", "G_contour_inner": e["G_contour_inner"],
             "G_contour_outer": e["G_contour_outer"], "G_field": e["G_field"], "Gamma": e["Gamma"],
             "take_inner": e["take_inner"], "take_outer": e["take_outer"],
+            "breaks_inner": e["breaks_inner"], "breaks_outer": e["breaks_outer"],
             "G_over_Gamma": _ratio(e["G_contour_inner"], e["Gamma"]),
             "G_field_over_Gamma": _ratio(e["G_field"], e["Gamma"]),
             "G_routes_ratio": _ratio(e["G_contour_inner"], e["G_field"]),
             "contours_ratio": inner_outer, "route1_ok": bool(abs(inner_outer - 1) <= CONTOURS),
-            "field_resolved": gmeasures.field_resolved(run), "snapshots": e["snapshots"], "frames": e["frames"],
+            "field_resolved": gmeasures.field_resolved(run), "longest_pause": longest_pause(front),
+            "snapshots": e["snapshots"], "frames": e["frames"],
             "scene": row["scene"], "commit": row["commit"]}
 
 
@@ -103,13 +126,13 @@ def energy_figure(rows: list[dict], img: str, source) -> list[str]:
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.8))
     for name, c in _colours(rows).items():
-        first = [r for r in rows if _label(r) == name and r["first"]]
+        first = [r for r in rows if _label(r) == name and r["first"] and ran(r)]
         ok = [r for r in first if r["route1_ok"]]
         ax.plot([r["v_over_cR"] for r in ok], [r["G_over_Gamma"] for r in ok], "o", color=c, ms=7,
                 label=f"{name}")
         res = [r for r in first if r["field_resolved"]]
         ax.plot([r["v_over_cR"] for r in res], [r["G_field_over_Gamma"] for r in res], "s", mfc="none", color=c, ms=7)
-        later = [r for r in rows if _label(r) == name and not r["first"] and r["route1_ok"]]
+        later = [r for r in rows if _label(r) == name and not r["first"] and r["route1_ok"] and ran(r)]
         ax.plot([r["v_over_cR"] for r in later], [r["G_over_Gamma"] for r in later], ".", color=c, ms=4)
     ax.axhline(1.0, color="0.3", lw=0.8, ls="--")
     ax.text(0.12, 1.03, "G = Gamma (Svetlizky & Fineberg 2014)", fontsize=7, transform=ax.get_yaxis_transform())
@@ -119,7 +142,8 @@ def energy_figure(rows: list[dict], img: str, source) -> list[str]:
     ax.set_xlabel("front speed over its steady stretch / c_R (the lattice's Rayleigh speed)")
     ax.set_ylabel("G / Gamma")
     ax.legend(fontsize=6, ncol=2, loc="upper left", title="first fronts: o route 1, [] route 2 (resolved);"
-              " . later fronts, route 1", title_fontsize=6)
+              f" . later fronts, route 1; fronts that pause over {STOP_GO:.0%} of their stretch left out",
+              title_fontsize=6)
     ax.set_title("T0 fronts between identical solids, l = 500 a: G / Gamma by both routes", fontsize=8)
     return save(fig, img, "cracks_energy_g_v", source)
 
@@ -136,7 +160,7 @@ def gap_figure(rows: list[dict], img: str, source) -> list[str]:
     fig, ax = plt.subplots(figsize=(9, 4.5))
     colours = _colours(rows)
     for r in rows:
-        if not (r["first"] and math.isfinite(r["G_routes_ratio"]) and r["G_routes_ratio"] > 0):
+        if not (r["first"] and ran(r) and math.isfinite(r["G_routes_ratio"]) and r["G_routes_ratio"] > 0):
             continue
         m = next(mk for h, mk in HEIGHT_MARKERS if r["height_lambda"] < h)
         c = colours[_label(r)]
@@ -155,11 +179,12 @@ def gap_figure(rows: list[dict], img: str, source) -> list[str]:
 
 def summary(rows: list[dict]) -> str:
     """The study's numbers in one paragraph: first fronts, speeds, G/Gamma by route 1, the routes' agreement."""
-    g = [r for r in rows if r["first"] and r["route1_ok"] and r["v_over_cR"] >= SLOWEST]
+    g = [r for r in rows if r["first"] and r["route1_ok"] and r["v_over_cR"] >= SLOWEST and ran(r)]
     both = [r for r in g if r["field_resolved"] and math.isfinite(r["G_routes_ratio"])]
     agree = [r for r in both if abs(r["G_routes_ratio"] - 1) <= AGREE]
-    later = [r for r in rows if not r["first"] and r["route1_ok"] and r["field_resolved"]
+    later = [r for r in rows if not r["first"] and r["route1_ok"] and r["field_resolved"] and ran(r)
              and math.isfinite(r["G_routes_ratio"])]
+    stop_go = [r for r in rows if r["first"] and not ran(r)]
     if not g:
         return f"No first front with route 1's contours within {CONTOURS:.0%} of each other."
     v = np.array([r["v_over_cR"] for r in g])
@@ -168,7 +193,9 @@ def summary(rows: list[dict]) -> str:
             f"1's contours within {CONTOURS:.0%}: {len(g)}, at {v.min():.3g}-{v.max():.3g} c_R, G/Gamma "
             f"{q.min():.3g}-{q.max():.3g}; {len(both)} of them on blocks >= {gmeasures.FIELD_HEIGHT:g} Lambda "
             f"(route 2 resolved), {len(agree)} with the routes within {AGREE:.0%}.  Later fronts with both: "
-            f"{len(later)}, {sum(abs(r['G_routes_ratio'] - 1) <= AGREE for r in later)} within {AGREE:.0%}.")
+            f"{len(later)}, {sum(abs(r['G_routes_ratio'] - 1) <= AGREE for r in later)} within {AGREE:.0%}.  "
+            f"First fronts that stop and start again (a pause over {STOP_GO:.0%} of the stretch), left out: "
+            f"{len(stop_go)}.")
 
 
 def tabulate(runs: str, img: str, tables: str) -> str:

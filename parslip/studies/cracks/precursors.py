@@ -6,10 +6,11 @@ and both readings of a re-formed bond's rest offset (``interface.reform_x0`` "ze
 detector's patience ``max_gap`` = 300 a/c_r, as on l = 100), its
 length in units of Lambda (``analysis.cracks.process_zone``, the Palmer-Rice length), F_T/F_N at its arrest
 (mu at the first frame after its tip's last advance) and the arrest fracture mechanics predicts for it
-(``analysis.arrest.arrest_prediction``).  Per reading, height and re-formation delay (``interface.heal_time``,
-swept by ``cracks_precursors_heal.toml``), the straight line L/Lambda = slope * F_T/F_N + intercept through
-the precursors of both normal loads, with its r^2 (Katano et al. 2014 find one line per regime whatever the
-height; Rubinstein et al. 2007 one per loading configuration).
+(``analysis.arrest.arrest_prediction``).  Per reading, height, re-formation delay (``interface.heal_time``,
+swept by ``cracks_precursors_heal.toml``) and normal load, the straight line L/Lambda = slope * F_T/F_N +
+intercept through its precursors, with its r^2: Katano et al. (2014) find one line per regime whatever the
+height, but a line that moves with the normal load (their Fig. 2c), and Rubinstein et al. (2007) one per
+loading configuration, so the loads are fitted apart.  ``refit`` draws the fits again from the tables alone.
 
 Tables: ``cracks_precursors.csv`` a row per run (``n_precursors``, ``min_length_over_lambda``, the height's
 ``slope`` and ``r2``), ``cracks_precursors_arrests.csv`` a row per precursor (measured and predicted
@@ -118,38 +119,41 @@ def line_fit(x, y) -> dict:
 
 
 def group(a: dict) -> tuple:
-    """What one fit spans: a reading, a height and a re-formation delay, over the normal loads."""
-    return a["reading"], a["height"], a["heal_time"]
+    """What one fit spans: a reading, a height, a re-formation delay and a normal load."""
+    return a["reading"], a["height"], a["heal_time"], a["F_N"]
 
 
 def fits(arrests: list[dict]) -> dict:
-    """``group`` -> ``line_fit`` of length_over_lambda against mu_arrest over both normal loads."""
+    """``group`` -> ``line_fit`` of length_over_lambda against mu_arrest."""
     keys = sorted({group(a) for a in arrests})
     return {k: line_fit([a["mu_arrest"] for a in arrests if group(a) == k],
                         [a["length_over_lambda"] for a in arrests if group(a) == k]) for k in keys}
 
 
 def length_figure(arrests, fit, img, source):
+    """Arrest length over Lambda against F_T/F_N at the arrest, a panel per reading, a colour per loading height
+    (and delay), a marker per normal load, and the line ``fits`` gives each (reading, height, delay, F_N)."""
     plt = pyplot()
     readings = sorted({a["reading"] for a in arrests}) or ["current", "zero"]
     fig, axes = plt.subplots(1, len(readings), figsize=(5 * len(readings), 4), squeeze=False)
     colors = dict(zip(HEIGHTS, ("C0", "C1", "C2", "C3")))
+    loads = sorted({a["F_N"] for a in arrests})
+    marks = dict(zip(loads, "os^D"))
     for ax, rd in zip(axes[0], readings):
         mine = [a for a in arrests if a["reading"] == rd]
-        for k, ((r, h, ht), f) in enumerate(fit.items()):
+        for k, ((r, h, ht, fn), f) in enumerate(fit.items()):
             if r != rd:
                 continue
-            sel = [a for a in mine if group(a) == (r, h, ht)]
+            sel = [a for a in mine if group(a) == (r, h, ht, fn)]
             c = colors[h] if ht == 0 else f"C{4 + k % 6}"
-            name = h if ht == 0 else f"{h}, heal_time {ht:g}"
-            for fn, mk in zip(sorted({a["F_N"] for a in sel}), "os^"):
-                pts = [a for a in sel if a["F_N"] == fn]
-                ax.plot([a["mu_arrest"] for a in pts], [a["length_over_lambda"] for a in pts], mk, color=c,
-                        mfc="none" if fn != max(a["F_N"] for a in sel) else c, label=f"{name}, F_N = {fn:g}")
-            if math.isfinite(f["slope"]):
+            name = (h if ht == 0 else f"{h}, heal_time {ht:g}") + f", F_N = {fn:g}"
+            filled = fn == loads[-1]
+            ax.plot([a["mu_arrest"] for a in sel], [a["length_over_lambda"] for a in sel], marks[fn], color=c,
+                    mfc=c if filled else "none", label=name)
+            if math.isfinite(f["slope"]):            # each load's own line: solid at the largest, dashed below
                 xs = np.linspace(min(a["mu_arrest"] for a in sel), max(a["mu_arrest"] for a in sel), 50)
                 ys = f["slope"] * xs + f["intercept"]
-                ax.plot(xs[ys > 0], ys[ys > 0], "-", color=c, lw=0.8)
+                ax.plot(xs[ys > 0], ys[ys > 0], "-" if filled else "--", color=c, lw=0.8)
         ax.axhline(3.0, color="k", ls=":", lw=0.8)
         ax.set_yscale("log")
         if not mine:
@@ -159,7 +163,8 @@ def length_figure(arrests, fit, img, source):
             ax.legend(fontsize=6)
         ax.set_xlabel("F_T / F_N at the arrest")
         ax.set_ylabel("arrest length / Lambda")
-        ax.set_title(f'reform_x0 = "{rd}": {len(mine)} precursors (dotted: 3 Lambda)', fontsize=8)
+        ax.set_title(f'reform_x0 = "{rd}": {len(mine)} precursors, a line per F_N (filled, solid: F_N = '
+                     f'{loads[-1]:g}; dotted: 3 Lambda)' if loads else f'reform_x0 = "{rd}"', fontsize=8)
     return save(fig, img, "cracks_precursors_length", source)
 
 
@@ -195,6 +200,18 @@ def prediction_figure(arrests, img, source):
     return save(fig, img, "cracks_precursors_prediction", source)
 
 
+def _fitted(rows: list[dict], arrests: list[dict], img: str, tables: str) -> tuple[str, dict]:
+    """Each run's row gets the fit of its group (``fits``); the runs' table and the length figure written.
+    Returns the Markdown of the runs' table and the figures' provenance."""
+    fit = fits(arrests)
+    nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
+    for r in rows:
+        r.update(fit.get(group(r), nan))
+    source = provenance(rows)
+    length_figure(arrests, fit, img, source)
+    return write(rows, RUN_COLS, os.path.join(tables, "cracks_precursors.csv")), source
+
+
 def tabulate(runs: str, img: str, tables: str) -> str:
     """Both tables and both figures (module docstring); returns the Markdown of the runs' table."""
     rows, arrests = [], []
@@ -205,13 +222,18 @@ def tabulate(runs: str, img: str, tables: str) -> str:
             r, a = run_arrests({**row, "sweep": os.path.basename(d)}, run)
             rows.append(r)
             arrests += a
-    fit = fits(arrests)
-    nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
-    for r in rows:
-        r.update(fit.get(group(r), nan))
     table.write_csv(os.path.join(tables, "cracks_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
                     arrests)
-    source = provenance(rows)
-    length_figure(arrests, fit, img, source)
+    md, source = _fitted(rows, arrests, img, tables)
     prediction_figure(arrests, img, source)
-    return write(rows, RUN_COLS, os.path.join(tables, "cracks_precursors.csv"))
+    return md
+
+
+def refit(tables: str, img: str) -> str:
+    """The fits again from the tables ``tabulate`` wrote (``cracks_precursors.csv``, one row per run, and
+    ``cracks_precursors_arrests.csv``, one per precursor), without the runs: the runs' table with its fit
+    columns and the length figure rewritten, every other column and the rows' scene and commit as they were.
+    Returns the Markdown of the runs' table."""
+    rows = table.read_rows(os.path.join(tables, "cracks_precursors.csv"))
+    arrests = table.read_rows(os.path.join(tables, "cracks_precursors_arrests.csv"))
+    return _fitted(rows, arrests, img, tables)[0]
