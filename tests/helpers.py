@@ -264,3 +264,15 @@ def ranks_below(launcher_pid) -> list[int]:
         except OSError:
             pass
     return ranks
+
+
+def run_small(tmp_path, name: str, n: int = 1, extra=(), timeout: float = 200, **sets):
+    """SMALL (plus the dotted overrides ``sets``, no snapshots unless set) run by the command line on n ranks
+    with the gathering writer: (the scene file, the output file), the run checked to have ended well."""
+    require("gather")
+    sc = tmp_path / f"{name}.toml"
+    sc.write_text(small_toml(**{"output.snapshots": 0, **sets}))
+    out = tmp_path / f"{name}_{n}.vtkhdf"
+    p = run_cli(n, "run", sc, "--out", out, "--no-png", "--quiet", "--watchdog", "30", *extra, timeout=timeout)
+    assert p.returncode == 0, p.stderr
+    return sc, out

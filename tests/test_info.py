@@ -17,8 +17,9 @@ from parslip.scene import budget, presets
 from parslip.scene.derive import derive
 from parslip.scene.load import load_scene_text, parse_set, resolve
 
-LABELS = ("scene", "lattice", "top block", "substrate", "interface", "wave speeds", "Rayleigh speed", "surface wave",
-          "stability", "time step", "steps", "cost", "memory", "output", "ranks", "left out", "warnings")
+LABELS = ("scene", "lattice", "top block", "substrate", "interface", "weakening", "law scales", "wave speeds",
+          "Rayleigh speed", "surface wave", "stability", "time step", "steps", "cost", "memory", "output", "ranks",
+          "left out", "warnings")
 
 
 def _info(capsys, tmp_path, *argv, **over):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import parslip
-from helpers import SMALL, datasets, require, run_cli, scene, small_toml
+from helpers import SMALL, datasets, require, run_cli, run_small, scene, small_toml
 from parslip.cli import main
 from parslip.io.contract import EVENT_BREAK, EVENT_FORM
 from parslip.model.interface import InterfaceLaw, random_field
@@ -26,13 +26,7 @@ def _interface(path) -> dict:
 
 
 def _run(tmp_path, name, n=1, **sets):
-    require("gather")
-    sc = tmp_path / f"{name}.toml"
-    sc.write_text(small_toml(**{"output.snapshots": 0, **sets}))
-    out = tmp_path / f"{name}_{n}.vtkhdf"
-    p = run_cli(n, "run", sc, "--out", out, "--no-png", "--quiet", "--watchdog", "30", timeout=150)
-    assert p.returncode == 0, p.stderr
-    return out
+    return run_small(tmp_path, name, n, timeout=150, **sets)[1]
 
 
 def test_a_patch_with_the_scenes_own_values_is_the_uniform_run(tmp_path):
@@ -189,7 +183,8 @@ def test_healing_and_a_random_field_survive_a_restart_on_another_rank_count(tmp_
     ("interface.patch=[{x=[0.4,0.6], delta_b=0.5}]", "interface.patch[0].delta_b = 0.5: at or below delta0"),
     ("interface.random.cv=-0.1", "interface.random.cv = -0.1: out of range"),
     ("interface.random.correlation=-1", "interface.random.correlation = -1.0: out of range"),
-    ("interface.random.key=k_y", "interface.random.key = 'k_y': out of range; accepted: 'kx', 'ky' or 'delta_b'"),
+    ("interface.random.key=k_y", "interface.random.key = 'k_y': out of range; accepted: 'kx', 'ky', 'delta_b' or "
+                                 "'softening'"),
     ("interface.heal_time=-1", "interface.heal_time = -1.0: out of range"),
     ("interface.heal_speed=-1", "interface.heal_speed = -1.0: out of range"),
 ])

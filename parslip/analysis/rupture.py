@@ -8,6 +8,8 @@ andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / 
 daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
 andrews_lc, andrews_f           Andrews' (1976) critical half-length L_c and his transition factor f(S) as Xia
                                 et al. (Science 2004) fit it: L_trans = f(S) L_c
+law_scales(setup)               a scene's own scales before any run: the law's tau_p, tau_r, Gamma, Palmer &
+                                Rice's Lambda, and with a held prestress tau_0, S and Andrews' L_c
 transition(run, front)          where a front went supershear: the distance from its nucleation at which a
                                 daughter was born ahead of it (or its tip first ran above c_s), Andrews'
                                 L_trans for the S measured on it, and the speed the supershear front settled at
@@ -160,6 +162,45 @@ def andrews_lc(modulus: float, tau_p, tau_0, tau_res, d_c):
     drop = np.asarray(tau_0, float) - np.asarray(tau_res, float)
     return modulus * (np.asarray(tau_p, float) - np.asarray(tau_res, float)) * np.asarray(d_c, float) / \
         (math.pi * drop * drop)
+
+
+def law_scales(setup) -> dict:
+    """The interface law's scales of a scene (``scene.derive.Setup``), from the scene alone, as ``parslip info``
+    prints them: at rest under F_N (``model.interface.InterfaceLaw.strength``), the means over the sites of
+    the held prestress's stretch (``drive.prestress.x``; the whole contact without one) of
+
+        tau_p   the peak shear traction k_x x_b / a, x_b = sqrt(delta_b^2 - gap^2) (rho c_r^2)
+        tau_r   the residual mu F_N / (N a), at most tau_p (rho c_r^2; 0 without contact friction)
+        D_c     the weakening distance (a)
+        Gamma   the fracture energy tau_p x_b / 2 + (tau_p - tau_r) D_c / 2 per unit length (m c_r^2 / a)
+
+    and from them, with M the block's static mode II modulus (1 / H(0) of the Born continuum,
+    ``cracks.mode2_compliance``; m c^2/a^2):
+
+        Lambda  = 9 pi / 16  M Gamma / (tau_p - tau_r)^2                   (a)  Palmer & Rice's process zone
+        S       = (tau_p - tau_0) / (tau_0 - tau_r)                              Andrews' seismic ratio
+        L_c     = 2 M Gamma / (pi (tau_0 - tau_r)^2)                       (a)  Andrews' critical half-length
+
+    (``andrews_lc`` with (tau_p - tau_r) D_c = 2 Gamma), tau_0 = drive.prestress.tau0; tau_0, S and L_c are
+    NaN without a held prestress.  At D_c = 0 and tau_r = 0, Lambda is ``cracks.palmer_rice_length``."""
+    from .cracks import PALMER_RICE, mode2_compliance
+    st, law, mat = setup, setup.law, setup.material
+    n = st.lattice.n_top_sites
+    held = st.drive.prestress
+    lo, hi = held.sites(n) if held is not None else (0, n)
+    v = law.strength(n, st.scene["load.FN"])
+    mean = {k: float(np.mean(v[k][lo:hi])) for k in ("tau_p", "tau_r", "D_c", "Gamma", "x_b")}
+    M = 1.0 / mode2_compliance(0.0, mat.kn_top, mat.kt_top)
+    unit = DENSITY * mat.c_r ** 2                          # one rho c_r^2 in internal stress
+    tp, tr, gamma = mean["tau_p"], mean["tau_r"], mean["Gamma"]
+    out = {"tau_p": tp / unit, "tau_r": tr / unit, "D_c": mean["D_c"], "x_b": mean["x_b"],
+           "Gamma": gamma / mat.c_r ** 2, "M": M, "Lambda": PALMER_RICE * M * gamma / (tp - tr) ** 2,
+           "tau_0": math.nan, "S": math.nan, "L_c": math.nan}
+    if held is not None:
+        t0 = held.tau0 * unit
+        out.update(tau_0=held.tau0, S=(tp - t0) / (t0 - tr) if t0 > tr else math.inf,
+                   L_c=2.0 * M * gamma / (math.pi * (t0 - tr) ** 2) if t0 > tr else math.inf)
+    return out
 
 
 def _modulus_and_stress_unit(run) -> tuple[float, float]:

@@ -84,10 +84,36 @@ def _interface_lines(st) -> list[str]:
             + (f"; {len(law.patches)} patch(es)" if law.patches else "")
             + (f"; random {law.random[0]}: cv {law.random[1]:g}, correlation {law.random[2]:g} a, seed "
                f"{law.random[3]}" if law.random else "")))
+    out += _rupture_lines(st)
     if law.heal:
         out.append(_line("healing", f"re-bond only below a relative slip velocity of {law.heal_speed:g} c_r"
                          * bool(law.heal_speed) + ("; " if law.heal_speed and law.heal_time else "")
                          + f"after claiming the same site for {law.heal_time:g} l/c_r" * bool(law.heal_time)))
+    return out
+
+
+def _rupture_lines(st) -> list[str]:
+    """The law's weakening, friction and scales (``analysis.rupture.law_scales``), the held prestress and
+    Andrews' S and L_c, the nucleation."""
+    from ..analysis.rupture import law_scales
+    law, held, z = st.law, st.drive.prestress, st.law.nucleation
+    k = law_scales(st)
+    where = f" over x = {list(held.x)} l" if held is not None else ""
+    out = [_line("weakening", f"D_c = {k['D_c']:.4g} a past the peak, secant unloading" if law.soften else
+                 "none: a bond breaks at its peak (interface.softening = 0)"),
+           _line("law scales", f"tau_p = {k['tau_p']:.4g}, tau_r = {k['tau_r']:.4g} rho c_r^2, Gamma = "
+                               f"{k['Gamma']:.4g} m c_r^2/a at rest under F_N{where}: Lambda = 9 pi/16 M Gamma/"
+                               f"(tau_p - tau_r)^2 = {k['Lambda']:.4g} a (M = {k['M']:.4g})")]
+    if held is not None:
+        out.append(_line("prestress", f"tau_0 = {k['tau_0']:g} rho c_r^2 held, then {held.settle:g} l/c_r to "
+                                      f"settle: S = (tau_p - tau_0)/(tau_0 - tau_r) = {k['S']:.4g}, L_c = 2 M "
+                                      f"Gamma/(pi (tau_0 - tau_r)^2) = {k['L_c']:.4g} a"))
+    if z is not None:
+        lo, hi = z.sites(st.lattice.n_top_sites)
+        how = (f"a front from its centre at {z.speed:g} c_r, each site" if z.kind == "forced" else "every site")
+        out.append(_line("nucleation", f"{z.kind}: sites {lo} to {hi - 1} (x = {list(z.x)} l), {how} weakening to "
+                                       f"its residual over {z.duration:g} l/c_r, from {z.start:g} l/c_r after "
+                                       + ("the prestress settled" if held is not None else "the drive's start")))
     return out
 
 

@@ -76,8 +76,9 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy ste
 # The energy budget on one rank (``kernels.budget``): acc [N_Q, 2] int64, the exact sums the row kernels
 # make (``kernels.exact``: the damping since the drive started; the kinetic and bulk elastic energy of the
 # last step that ended on a frame); work per driven slot, an array [2, slots] of float pairs (hi, lo); sites
-# [row, 2, site], the running totals per interface site (local column of the block's interface row), one
-# row of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the contacts' switches); base [2, N_TERMS]:
+# [row, 2, site], the running totals per interface site (local column of the block's interface row), one row
+# of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the contacts' switches, the weakening);
+# base [2, N_TERMS]:
 # what a restart carried over (rank 0); prev [2, slots]: each driven slot's u(n-1) (x, y); scale [N_Q]: each
 # exact sum's quanta per m c^2 (``kernels.exact.scales``); cs: the kernels' factors with them,
 # [zeta/(4 dt) S_damp, -S_damp/(2 C), S_kin/(2 dt^2), -S_el/(2 C)] (``stencil.budget_shares``).
@@ -105,9 +106,11 @@ Diag = namedtuple("Diag", "flags gflags timers beat halo")
 #   follow, shift           the halos follow the interface's drift (several ranks, no explicit slip reach): the
 #                           agreements also reduce the drift and return REBUILD when it nears the halo's box;
 #                           shift D: the block's columns stand at x-columns c + D (``parallel.layout.Drift``)
+#   n_hold                  the step from which the loader holds still (``drive.prestress``: set by ``Simulation``
+#                           once the interface's mean shear traction has reached tau_0; NEVER until then)
 Params = namedtuple("Params", "n_ramp n_drive_start drive frame_every n_frames frame_offset check_every has_iface "
                               "rigid brow dt v0 fext jump cf inv_cf damped event_limit spring v0dt rated drag follow "
-                              "shift")
+                              "shift n_hold")
 
 # Or'ed into the step's drive mode when the drive's force must be kept: in a step that ends on an interface
 # frame (the frame records it) or on the end of the call (a checkpoint or a restart may read it there).
@@ -366,6 +369,18 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
                 return
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def _loader_shift(n, prm):
+    """How far the loader has moved at t(n + 1), v0 (t(n + 1) - t_drive) (a): the driven face's prescribed x
+    for u(n + 1); a spring drive reads its loader at t(n), this less v0 dt.  From ``n_hold`` on the loader
+    holds still where it was at t(n_hold) (for the springs: this plus v0 dt)."""
+    n_ds = prm.n_drive_start
+    if n + 1 <= prm.n_hold:
+        return like(prm.v0 * ((n + 1 - n_ds) * prm.dt), prm.cf)
+    held = like(prm.v0 * ((prm.n_hold - n_ds) * prm.dt), prm.cf)
+    return held + prm.v0dt if prm.drive & DRIVE_SPRING else held
+
+
 @njit(cache=True, _nrt=False)
 def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
     """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1); ``n1`` is where the
@@ -386,7 +401,7 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
                 d0[r, j] = cur.tx[r, j]
     lf = ramp_share(n, prm.n_ramp)
     gy = like(lf * prm.fext, prm.cf)
-    shift = like(prm.v0 * ((n + 1 - n_ds) * prm.dt), prm.cf)
+    shift = _loader_shift(n, prm)
     flags, tm = diag.flags, diag.timers
     clk = tm[T_CLOCK:T_CLOCK + 2]
     timed = n % TIME_EVERY == 0           # sample the phase times (a clock read is 25 to 100 ns)
@@ -443,7 +458,7 @@ def _budget_start(cur, old, drive, bud):
 
 
 @njit(cache=True, _nrt=False)
-def _energies(cur, old, sched, prm, iface, bud, out):
+def _energies(n, cur, old, sched, prm, iface, bud, out):
     """This rank's share of the budget at a frame (``kernels.budget``), out[:, term]: the float pairs in rows
     0-1 (the running totals with what a restart carried over, the interface bonds' and the contact springs'
     staggered energy, the load's sum), the kernels' exact sums in rows 2-4 (the damping; the kinetic and bulk
@@ -465,7 +480,7 @@ def _energies(cur, old, sched, prm, iface, bud, out):
             bg.load_sum(cur.ty, old.ty, tk.row, tk.j0, tk.n, out)
     if prm.has_iface:
         br = prm.brow
-        ik.staggered(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
+        ik.staggered(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
                      old.by[br], iface, out)
         if iface.rules.contact > 0:
             ik.contact_staggered(cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD],
@@ -489,12 +504,12 @@ def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
     if slot >= frames.step.shape[0]:
         return False
     if prm.has_iface:
-        ik.record(cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
+        ik.record(n, cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
     # The drive's force in the step that ended here (0 before the drive's first step).
     on = prm.drive != 0 and n > prm.n_drive_start
     for i in range(drive.force.shape[0]):
         frames.fdrive[slot, i] = drive.force[i] if on else 0.0
-    _energies(cur, old, sched, prm, iface, bud, frames.energy[slot])
+    _energies(n, cur, old, sched, prm, iface, bud, frames.energy[slot])
     frames.step[slot] = n
     cursor[C_COUNT] = slot + 1
     cursor[C_LAST] = k

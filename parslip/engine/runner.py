@@ -343,6 +343,9 @@ class Job:
             self.checkpoint()
         self.monitor.phase("finish")
         self._timings()
+        held = self.sim.hold.output_attrs()
+        if held:                            # the same on every rank: the scene's
+            self.writer.set_attrs(held)
         self.writer.close(self.status or "complete")
 
     def _timings(self):

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import NonFiniteError, SlipReachError
 from ..io.contract import ENERGY_SINKS, ENERGY_SOURCES
-from ..model.interface import BONDS
+from ..model.interface import BONDS, NEVER
 from ..model.lattice import TOP
 from ..model.physics import ROW_HEIGHT
 from ..parallel.exact_sum import exact_sums
@@ -32,6 +32,7 @@ from .kernels import budget as bg
 from .kernels import exact
 from .kernels.scheme import ramp_share
 from ..scene.memory import CHECK_EVERY, event_room, frame_buffer
+from .prestress import Hold
 from .state import State
 
 # Work per compiled call, in node updates: about 0.3 s, so progress and output stay timely.
@@ -63,7 +64,7 @@ class Simulation:
             cf=self.dtype.type(cf), inv_cf=self.dtype.type(1.0 / cf), damped=st.damping.damped,
             event_limit=event_room(0, buffer_events)[0], spring=self.dtype.type(st.drive.spring),
             rated=st.damping.rated, drag=st.damping.damped and sc["output.energy"] == "checked",
-            v0dt=self.dtype.type(st.v0 * st.dt), follow=follow, shift=0)
+            v0dt=self.dtype.type(st.v0 * st.dt), follow=follow, shift=0, n_hold=NEVER)
         self.diag = L.Diag(flags=np.zeros(L.L_SIZE, np.int64), gflags=np.zeros(L.L_SIZE, np.int64),
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64),
                            halo=np.zeros(L.H_SIZE, np.int64))
@@ -83,6 +84,7 @@ class Simulation:
         self.snapshots_written = 0
         self.last_frame_step = -1
         self.events_written = 0          # bond events in the output file (over all ranks)
+        self.hold = Hold(st, self.comm)  # drive.prestress: where the loader stops
 
     def _build(self, layout):
         """This rank's arrays for ``layout``, all zero: the state, the exchange plan, the schedule, the frame
@@ -198,6 +200,7 @@ class Simulation:
         chunk = self.chunk
         while True:
             self._snapshot(writer)
+            self.hold.read(self)
             if self.n >= end:          # a stop asked for at the last step finds the run complete, not stopped
                 break
             if control is not None:
@@ -208,7 +211,8 @@ class Simulation:
                     return action
             target = min(end, self.n + chunk, min((k for k in self._snap if k > self.n), default=end),
                          control.next_stop(self.n) if control is not None else end,
-                         st.n_drive_start if self.n < st.n_drive_start else end)
+                         st.n_drive_start if self.n < st.n_drive_start else end,
+                         self.hold.next_read(self.n) or end)
             if self.drive_clock is None and self.n >= st.n_drive_start:
                 self.drive_clock = (time.monotonic(), time.process_time(), self.n)
             self._phase("loop")
@@ -279,16 +283,18 @@ class Simulation:
             self.last_frame_step = int(fr.step[count - 1])
         if writer is not None and count:
             base = int(fr.cursor[L.C_BASE])
-            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]), self.budget_frames(count))
+            held = None if self.hold.step is None else self.hold.step - self.setup.n_drive_start
+            writer.interface_frames(base, count, fr, self.frame_time(fr.step[:count]), self.budget_frames(count),
+                                    held=held)
         fr.cursor[L.C_BASE] += count
         fr.cursor[L.C_COUNT] = 0
         ev = self.state.iface.events
         m = int(ev.count[0])
         if writer is not None:
             nds = self.setup.n_drive_start
-            self.events_written = writer.interface_events(
-                self.events_written, ev.step[:m] - nds, ev.site[:m], ev.kind[:m], ev.partner[:m], ev.energy[:m],
-                ev.traction[:m], self.drive_time)
+            fields = {name: getattr(ev, name)[:m] for name in ev._fields if name != "count"}
+            fields["step"] = fields["step"] - nds
+            self.events_written = writer.interface_events(self.events_written, fields, self.drive_time)
         ev.count[0] = 0
 
     # ----------------------------------------------------------- checkpoints --
@@ -378,6 +384,7 @@ class Simulation:
         self.snapshots_total = snaps + len(later)
         self.snapshots_written = snaps
         self._energy_restore(attrs, a["u_prev"][s.driven_gid - slab.nodes[0]])
+        self.hold.restore(self, attrs)
         follow.resume(self, attrs)          # the restored slabs of no drift follow the checkpoint's drift
 
     def refill_halos(self):
@@ -419,7 +426,8 @@ class Simulation:
                "broken": tot[:, bg.BROKEN] * e, "formed": tot[:, bg.FORMED] * e,
                "kinetic": change[bg.KINETIC], "elastic": change[bg.ELASTIC],
                "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[bg.STATE.index(bg.LOAD_Y)]) * e,
-               "contact": change[bg.CONTACT], "contact_switched": tot[:, bg.SWITCHED] * e}
+               "contact": change[bg.CONTACT], "contact_switched": tot[:, bg.SWITCHED] * e,
+               "softening": tot[:, bg.SOFTENED] * e}
         balance = sum(out[k] for k in ENERGY_SOURCES) - sum(out[k] for k in ENERGY_SINKS if k != "damping")
         if self.params.drag or self.setup.damping.zeta == 0:
             out["residual"] = balance - out["damping"]
@@ -463,21 +471,23 @@ class Simulation:
         b.base[:] = 0.0
         b.acc[:] = 0
         if self.rank == 0:
-            b.base[:] = np.nan if tot is None else self._later_terms(tot, bg.N_TERMS)
+            b.base[:] = np.nan if tot is None else self._later_terms(tot, range(bg.N_TERMS))
             if tot is not None:
                 b.acc[:] = np.asarray(attrs["energy_quanta"], np.int64)
             # None where not known yet (a checkpoint before the drive's start): the drive's first frame gives it.
             base = attrs.get("energy_base")
             known = base is not None and not np.isnan(base).all()
-            self.energy_base = self._later_terms(np.asarray(base)[None], len(bg.STATE))[0] if known else None
+            self.energy_base = self._later_terms(np.asarray(base)[None], bg.STATE)[0] if known else None
         b.prev[:] = driven_u_prev.T
 
-    def _later_terms(self, values, n: int) -> np.ndarray:
-        """A checkpoint's budget terms ([rows, terms]) padded to ``n`` terms: a checkpoint written before the
-        contact's terms existed carries none, 0 without a contact and unknown (NaN) with one."""
+    def _later_terms(self, values, terms) -> np.ndarray:
+        """A checkpoint's budget terms ([rows, terms]) padded to the terms ``terms`` (their indices, in order): a
+        checkpoint written before a term existed carries none.  The contact's terms are 0 without a contact
+        and unknown (NaN) with one; the weakening's 0 (a checkpoint before it had no weakening)."""
         values = np.asarray(values, np.float64)
-        fill = np.nan if self.setup.law.contact else 0.0
-        return np.concatenate([values, np.full((values.shape[0], n - values.shape[1]), fill)], axis=1)
+        terms = list(terms)[values.shape[1]:]
+        fill = [np.nan if self.setup.law.contact and t in (bg.CONTACT, bg.SWITCHED) else 0.0 for t in terms]
+        return np.concatenate([values, np.tile(np.asarray(fill, np.float64), (values.shape[0], 1))], axis=1)
 
     def checkpoint_attrs(self) -> dict:
         """The scalar part of a checkpoint, collective (the event counters are summed over the ranks)."""
@@ -485,7 +495,7 @@ class Simulation:
         counters = self.counters.copy()
         if self.comm is not None:
             counters = self.comm.allreduce(counters)
-        return {**self._energy_checkpoint(), "step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
+        return {**self._energy_checkpoint(), **self.hold.attrs(), "step": self.n, "time_lcr": st.to_lcr((self.n - st.n_drive_start) * st.dt),
                 "frames_written": self.frames_written, "last_frame_step": self.last_frame_step,
                 "events_written": self.events_written,
                 "snapshots_written": self.snapshots_written, "counters": counters,

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..io.contract import EVENT_DATASETS
 from ..model.lattice import BOTTOM, DIRECTIONS, DRIVEN, TOP
 from ..model.physics import DENSITY
 from ..parallel.layout import PAD
@@ -36,9 +37,8 @@ def stiffness_constants(kn: float, kt: float, dt: float, damping) -> np.ndarray:
 
 def event_record(capacity: int):
     """An empty event record (``kernels.interface.Events``) of ``capacity`` events."""
-    return ik.Events(step=np.zeros(capacity, np.int64), site=np.zeros(capacity, np.int32),
-                     kind=np.zeros(capacity, np.uint8), partner=np.zeros(capacity, np.int32),
-                     energy=np.zeros(capacity), traction=np.zeros(capacity), count=np.zeros(1, np.int64))
+    return ik.Events(**{name: np.zeros(capacity, EVENT_DATASETS[name][0]) for name in ik.Events._fields
+                        if name != "count"}, count=np.zeros(1, np.int64))
 
 
 def _arena(shapes, dtype) -> list[np.ndarray]:
@@ -235,7 +235,8 @@ class State:
     def potential_energy(self, n: int, load: float) -> float:
         """Potential energy of the OWNED part at step n, in m c^2 (``load``: the factor on F_N):
         bulk bonds (``kernels.diagnostics.bond_energy``), interface bonds
-        1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 on their top node, and the load's -F . u."""
+        1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 on their top node (at the site's k_x: a weakening
+        bond's secant is not read here), and the load's -F . u."""
         from .kernels.diagnostics import bond_energy
         e = np.zeros(self.n_owned)
         bond_energy(*self.level(n), self.own_block, self.own_prow, self.own_j, self.block_geometry(),

@@ -39,6 +39,10 @@ The writer (``io.output``) creates exactly these datasets and the readers
                         delta0)^2 (m c_r^2): at the length it broke at (break; it depends on the gap, so
                         on F_N), or with the rest offset it formed with (re-formation)
       traction float64  its shear traction k_x (x_ij - x0)/a then (rho c_r^2), as the frames' sxy
+      dissipated float64  the energy the bond's weakening took from its peak to its break (m c_r^2;
+                        interface.softening: the staggered form /energy/softening sums); 0 for a bond that
+                        broke at its peak and for a re-formation
+                        (energy and traction take a weakening bond's shear stiffness as it broke)
     attributes: events_written (how many are valid), site_column0 (the substrate column facing site 0:
     at the start every site s is bonded to column site_column0 + s)
   /VTKHDF                                      transient VTKHDF UnstructuredGrid of the snapshots (the
@@ -114,16 +118,18 @@ EVENT_DATASETS = {
     "energy": (np.float64, "m c_r^2: the bond's stored energy 1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 "
                            "at that step"),
     "traction": (np.float64, "rho c_r^2: the bond's shear traction k_x (x_ij - x0)/a at that step, as sxy"),
+    "dissipated": (np.float64, "m c_r^2: the energy the bond's weakening took from its peak to its break "
+                               "(interface.softening; 0 for a break at the peak and a re-formation)"),
 }
 
 # The energy budget: /energy/<name>, one value per interface frame (m c_r^2), in damped Verlet's discrete
 # energy (``engine.kernels.budget``): the state's terms as their change since the drive started, the works
 # and losses as their totals since then, so that the sources equal the sinks plus the residual:
 #     work_drive + work_normal + formed + contact_switched
-#         = elastic + kinetic + contact + damping + broken + residual.
+#         = elastic + kinetic + contact + damping + broken + softening + residual.
 ENERGY = "energy"
 ENERGY_SOURCES = ("work_drive", "work_normal", "formed", "contact_switched")
-ENERGY_SINKS = ("elastic", "kinetic", "contact", "damping", "broken")
+ENERGY_SINKS = ("elastic", "kinetic", "contact", "damping", "broken", "softening")
 ENERGY_DATASETS = {
     "work_drive": "the drive's work on the driven nodes, sum over steps of f . (u(n+1) - u(n-1))/2",
     "work_normal": "the normal load's work on the top face, the same sum",
@@ -140,6 +146,9 @@ ENERGY_DATASETS = {
                         "staggered energy at (u(n-1), u(n)) less the old one's, summed (a site that gains or "
                         "loses its contact, by a break, a re-formation or d crossing delta0, has one of the two); "
                         "0 without contact",
+    "softening": "the energy the bonds' weakening took (interface.softening): per step and weakening bond, "
+                 "1/2 (k(n-1) - k(n)) s(n-1) s(n) with k its secant shear stiffness and s = x_ij - x0, summed; "
+                 "0 without weakening",
     "residual": "what the other terms leave: the scheme's round-off; NaN where a term is unknown",
 }
 
@@ -154,7 +163,8 @@ def read_energy(path: str) -> dict | None:
         if g is None:
             return None
         n = int(f[INTERFACE].attrs.get("frames_written", g["residual"].shape[0]))
-        # A term the file predates (the contact's) reads NaN: its residual holds it, if the run had one.
+        # A term the file predates (the contact's, the weakening's) reads NaN: its residual holds it, if the run
+        # had one.
         out = {name: g[name][:n] if name in g else np.full(n, np.nan) for name in ENERGY_DATASETS}
         out["time"] = f[INTERFACE]["time"][:n]
         return out

@@ -484,6 +484,10 @@ class Output:
                                                  maxshape=(None,), chunks=(EVENT_CHUNK,)).attrs["units"] = unit
                     g[EVENTS][name].resize(self.spec.events_written, axis=0)
                 g[EVENTS].attrs["events_written"] = self.spec.events_written
+            for name in SITE_DATASETS:       # a file from before the row existed: the values this run uses
+                if name not in g:
+                    g.create_dataset(name, data=st.law.site_values(self.n_sites)[name]).attrs["units"] = \
+                        INTERFACE_DATASETS[name][2]
             if VTKHDF in f:
                 old = self._old_snapshots = f[f"{VTKHDF}/Steps/PointOffsets"].shape[0]
                 for path, shape in self.mesh.shapes(self.spec.snapshots_total).items():
@@ -496,10 +500,11 @@ class Output:
             f.attrs["n_ranks"] = self.size
 
     # --------------------------------------------------------------- writes --
-    def interface_frames(self, k0, count, frames, times, energy=None):
+    def interface_frames(self, k0, count, frames, times, energy=None, held=None):
         """Frames k0 .. k0 + count - 1 from the buffer ``frames`` (``engine.loop.Frames``) of my sites,
         recorded at ``times`` (l/c_r); with them the force sums of each frame (``forces``) and, from rank 0,
-        their energy budget ``energy`` (``ENERGY_DATASETS``; None: not kept)."""
+        their energy budget ``energy`` (``ENERGY_DATASETS``; None: not kept).  ``held``: the drive step from
+        which the loader holds still (``drive.prestress``), None while it moves."""
         ns = frames.intact.shape[1]
         sl = (slice(k0, k0 + count), slice(self.frame_site0, self.frame_site0 + ns))
         self._test_hooks(k0 + count)
@@ -509,8 +514,9 @@ class Output:
         if self.root:                  # the per-frame series: rank 0 alone holds them
             st = self.spec.setup
             steps = frames.step[:count] - st.n_drive_start
+            moved = steps if held is None else np.minimum(steps, held)
             per_frame = dict(sums, time=times, step=steps,
-                             loader=steps * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count))
+                             loader=moved * st.dt * st.v0 / st.l if st.drive.on else np.zeros(count))
             rows = (slice(k0, k0 + count),)
             pieces = [(f"interface/{name}", rows, values) for name, values in per_frame.items()]
             if energy is not None and self._has_energy:
@@ -542,19 +548,19 @@ class Output:
             self._held = True
             hooks.hold(f"{self.path}.held")
 
-    def interface_events(self, k0: int, steps, sites, kinds, partners, energies, tractions, time_of) -> int:
-        """Append every rank's bond events (drive steps ``steps``, global ``sites``, ``kinds``, ``partners``, the
-        bonds' stored ``energies`` and shear ``tractions``) at index ``k0`` of /interface/events, in the
-        contract's order: by step, then site, then kind.  Collective, also for a rank with none;
-        ``time_of(steps)`` gives their times (l/c_r).  Returns the events in the file, the same on every rank.
+    def interface_events(self, k0: int, fields: dict, time_of) -> int:
+        """Append every rank's bond events at index k0 of /interface/events, in the contract's order: by step,
+        then site, then kind.  ``fields`` holds one array per event dataset of the contract but ``time``
+        (``EVENT_DATASETS``: the drive steps, global sites, kinds, partners, the bonds' stored energies, ...),
+        all of one length.  Collective, also for a rank with none; ``time_of(steps)`` gives their times
+        (l/c_r).  Returns the events in the file, the same on every rank.
 
         Sites are dealt to the ranks in increasing order, so the order is by step, then rank, then each
         rank's own (site, kind) order: each rank sorts its own events and learns where they go from
         histograms over steps (``parallel.pieces.place_by_step``); no rank holds another's events, but rank
         0 of the gathering writer, one rank's at a time."""
-        mine = {"step": np.asarray(steps, np.int64), "site": np.asarray(sites, np.int32),
-                "kind": np.asarray(kinds, np.uint8), "partner": np.asarray(partners, np.int32),
-                "energy": np.asarray(energies, np.float64), "traction": np.asarray(tractions, np.float64)}
+        names = [name for name in EVENT_DATASETS if name != "time"]
+        mine = {name: np.asarray(fields[name], EVENT_DATASETS[name][0]) for name in names}
         order = np.lexsort((mine["kind"], mine["site"], mine["step"]))
         data = {name: values[order] for name, values in mine.items()}
         data["time"] = np.asarray(time_of(data["step"]), np.float64)

@@ -13,6 +13,11 @@ shear, T0; ``mode = "none"``: no drive) at v0 (c_r) along x:
 ``rows`` restricts a push or a pull to the face's rows [first, last] of the
 block (``[]``: every row).  The compiled loop reads the drive as one code
 (``code``): DRIVE_X or DRIVE_XY, with DRIVE_SPRING or'ed in; 0 is no drive.
+
+A held prestress (``prestress``, ``Prestress``) stops the loader once the
+interface's mean shear traction has reached tau_0 and holds it there: the
+driven face (or the springs' loader) keeps its x from that step on, and the
+lattice settles under the held load.
 """
 from __future__ import annotations
 
@@ -26,6 +31,27 @@ DRIVE_SPRING = 8
 
 
 @dataclass(frozen=True)
+class Prestress:
+    """Load the interface to a mean shear traction ``tau0`` (rho c_r^2, the unit of /interface/sxy), then hold:
+    the mean over the sites of ``x`` = [from, to) (l) of the shear traction they carry, summed exactly (so the
+    same on any rank count), is read every ``EVERY`` drive steps, sooner as it nears tau0 (the step to the
+    crossing extrapolated from the last two readings, at least 1); the drive stops at the first reading at
+    or above tau0, every rank at the same step, and the lattice then settles for ``settle`` (l/c_r) before a
+    nucleation starts."""
+    tau0: float
+    settle: float
+    x: tuple = (0.0, 1.0)
+
+    # Drive steps between readings of the mean while it is far from tau0 (the loop's agreement cadence).
+    EVERY = 256
+
+    def sites(self, n_sites: int) -> tuple[int, int]:
+        """The global sites [lo, hi) whose mean is read (``model.interface.zone_sites``)."""
+        from .interface import zone_sites
+        return zone_sites(self.x, n_sites)
+
+
+@dataclass(frozen=True)
 class Drive:
     """The loading of one scene (see the module docstring); times in l/c_r, v0 in c_r, spring in m c^2/a^2."""
     mode: str                    # "push", "pull", "shear" or "none"
@@ -36,14 +62,18 @@ class Drive:
     rows: tuple = ()             # (first, last) rows of a push or pull; (): every row of the face
     ramp: float = 0.0            # l/c_r over which F_N rises linearly
     settle: float = 0.0          # l/c_r of damped settling at full F_N before the drive
+    prestress: Prestress | None = None   # stop the drive at a mean interface shear traction and hold it
 
     @classmethod
     def from_scene(cls, scene: dict) -> "Drive":
         """The drive of a resolved scene (every ``drive.*`` and ``load.ramp``, ``load.settle`` key present)."""
+        tau0 = float(scene["drive.prestress.tau0"])
+        held = Prestress(tau0=tau0, settle=float(scene["drive.prestress.settle"]),
+                         x=tuple(float(v) for v in scene["drive.prestress.x"])) if tau0 > 0 else None
         return cls(mode=scene["drive.mode"], hold=scene["drive.hold"], v0=float(scene["drive.v0"]),
                    duration=float(scene["drive.duration"]), spring=float(scene["drive.spring"]),
                    rows=tuple(int(r) for r in scene["drive.rows"]), ramp=float(scene["load.ramp"]),
-                   settle=float(scene["load.settle"]))
+                   settle=float(scene["load.settle"]), prestress=held)
 
     @property
     def on(self) -> bool:

@@ -8,6 +8,32 @@ bottom, in a) and x0 its rest offset:
     breaks when             sqrt(x_ij^2 + y_ij^2) >= delta_b                          (a)
     a free site re-bonds    to a free bottom site within ``rebond_length`` (a)
 
+Slip weakening (``softening`` = D_c > 0, a per-site value; 0, the paper: the
+bond breaks at its peak).  With s = x_ij - x0 the shear stretch, the peak is
+the step at which the length test above first holds; from there the bond
+weakens instead of breaking:
+
+    peak      s_p = |s| at the peak; tau_p = k_x s_p (the shear force it held then, m c^2/a)
+    slip      delta = |s| - s_p past the peak, its largest so far delta_m (irreversible)
+    residual  tau_r = mu N, N = max(0, k_y (delta0 - y_ij)) the bond's normal force now (contact
+              friction mu, below); 0 without it; at most tau_p
+    envelope  tau_m = tau_p - (tau_p - tau_r) w,  w = min(1, delta_m / D_c)
+    force     f_x = -k_d s,  k_d = tau_m / (s_p + delta_m)   (the secant to the origin: unloading and
+              reloading below the envelope are elastic with k_d, damage only grows on it)
+    breaks    when w = 1 (the traction has fallen to tau_r), or when its length reaches delta_b + D_c
+              (a bond opening, or loaded the other way: a length the halo still serves)
+
+k_y is untouched while the bond weakens (f_y as above, both in compression and tension), so its
+normal energy is elastic and released at the break, never part of the weakening.  A re-formed bond
+starts undamaged.  In a monotonic shear at a constant gap y (x0 = 0) the bond peaks at x_b =
+sqrt(delta_b^2 - y^2), tau_p = k_x x_b, and its fracture energy (``fracture``)
+
+    Gamma = tau_p x_b / 2 + (tau_p - tau_r) D_c / 2                       (m c^2/a per bond)
+
+is its elastic energy at the peak, which the damage takes, and the weakening's area above the residual;
+at D_c = 0 it is the stored energy at the break, the paper's law.  The nucleation (``Nucleation``)
+forces the same weakening on a zone of sites: w = max(delta_m / D_c, the forcing's share of its time).
+
 The rules a scene can choose are codes, each written once as an inlined
 function in ``engine.kernels.interface``:
 
@@ -105,9 +131,10 @@ HEAL_SPEED, HEAL_TIME = 1, 2
 #   checkpoint   the dtype a checkpoint stores it in ("int64"; None: the state's float type), or False
 #   output       "frame": written per interface frame (/interface/<name>, by ``kernels.interface.record``);
 #                "site": written once per site (/interface/<name>, from ``site_values``); None: not written
-#   initial      the value every site starts with, in the row's units; a checkpoint that lacks the row (one
-#                written before the row existed) restarts with it.  None: set by the state from the scene
-#                (the facing substrate column; the site's own constants), and every checkpoint holds it.
+#   initial      the value a checkpoint that lacks the row (one written before the row existed) restarts
+#                with, in the row's units: what gives the behaviour of the code that wrote it (a state row's
+#                fresh value; for a site's constant, the value its key had then, ``io.checkpoint.IMPLIED``).
+#                None: set by the state from the scene, and every checkpoint holds it.
 BondRow = namedtuple("BondRow", "name travels checkpoint output units meaning initial", defaults=(None,))
 BOND_TABLE = (
     BondRow("partner", True, "int64", "frame", "-", "the substrate column bonded to (-1 broken)"),
@@ -119,6 +146,13 @@ BOND_TABLE = (
     BondRow("kx", False, None, "site", "m c^2/a^2", "the bond's shear stiffness"),
     BondRow("ky", False, None, "site", "m c^2/a^2", "the bond's normal stiffness"),
     BondRow("delta_b", False, None, "site", "a", "the bond's breaking length"),
+    BondRow("softening", False, None, "site", "a", "the bond's weakening distance D_c past its peak (0: it "
+                                                   "breaks at its peak)", 0.0),
+    BondRow("peak", True, None, None, "a", "softening: |x_ij - x0| at the bond's peak, where its weakening "
+                                           "began (0: undamaged)", 0.0),
+    BondRow("slipped", True, None, None, "a", "softening: the largest slip past the peak so far, |x_ij - x0| "
+                                              "- peak", 0.0),
+    BondRow("spent", True, None, None, "m c^2", "softening: the energy the bond's weakening has taken so far", 0.0),
 )
 # What the table implies (``bond_layout``): names (row order), travel (indices of the travelling rows),
 # checkpoint (names a checkpoint holds), dtypes ({name: checkpoint dtype}), frame_output and site_output
@@ -139,8 +173,9 @@ def bond_layout(table) -> BondLayout:
 BONDS = bond_layout(BOND_TABLE)
 BOND_ROWS = BONDS.names
 # The rows the compiled kernels index by name.
-PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B = (BOND_ROWS.index(name) for name in
-                                             ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b"))
+PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B, SOFTENING, PEAK, SLIPPED, SPENT = (
+    BOND_ROWS.index(name) for name in ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b", "softening", "peak",
+                                       "slipped", "spent"))
 
 # Kinds of a bond event (``/interface/events/kind``): the one place they are numbered.
 BREAK, FORM = 1, 2
@@ -150,11 +185,25 @@ EVENT_KINDS = {BREAK: "break", FORM: "re-formation"}
 #   delta0 (a), rebond_length (a), reform, rebond and heal: the rules' codes; heal_du = heal_speed dt (a):
 #   the largest relative x-displacement per step at which a site re-bonds; n_heal = ceil(heal_time/dt).
 #   contact (m c^2/a^2): the stiffness of the unbonded sites' contact with the substrate (0: none).
-Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact")
+#   soften: SOFTEN when some bond weakens (a site's D_c > 0, or a nucleation), else 0 (the paper's break);
+#   mu: the contact's friction coefficient, which sets the weakening's residual; tiny: the smallest positive
+#   normal number of the float type (the peak of a bond that peaks with no shear stretch).
+#   nuc: the nucleation's code (NUCLEATE_*, 0 none); nuc_lo, nuc_hi: its global sites [lo, hi);
+#   nuc_centre: the zone's centre in sites (site s stands at s + 1/2); nuc_delay: steps per site the forced
+#   front takes (0: every site at once); nuc_steps: the steps a site's forcing takes to the residual;
+#   nuc_start: the step the forcing starts (NEVER until decided: ``engine.simulation`` sets it once a held
+#   prestress has settled).
+Rules = namedtuple("Rules", "delta0 rebond_length reform rebond heal heal_du n_heal contact soften mu tiny nuc "
+                            "nuc_lo nuc_hi nuc_centre nuc_delay nuc_steps nuc_start")
+SOFTEN = 1
+NUCLEATE_TIME, NUCLEATE_FORCED = 1, 2
+NUCLEATION_CODES = {"none": 0, "time": NUCLEATE_TIME, "forced": NUCLEATE_FORCED}
+# A step no run reaches: the nucleation's start before it is decided.
+NEVER = 2 ** 62
 
 
-PATCH_KEYS = ("kx", "ky", "delta_b")
-RANDOM_KEYS = ("kx", "ky", "delta_b")
+PATCH_KEYS = ("kx", "ky", "delta_b", "softening")
+RANDOM_KEYS = ("kx", "ky", "delta_b", "softening")
 
 
 def check_patches(patches, delta0: float) -> None:
@@ -180,7 +229,8 @@ def check_patches(patches, delta0: float) -> None:
             why = "reversed or empty" if x[0] >= x[1] else "outside the contact [0, 1]"
             raise ConfigError(f"{where}.x = {x!r}: {why}; accepted: [from, to] in l, 0 <= from < to <= 1")
         for key, ok, acc in (("kx", lambda v: v >= 0, ">= 0"), ("ky", lambda v: v > 0, "> 0"),
-                             ("delta_b", lambda v: v > delta0, f"> delta0 = {delta0!r}")):
+                             ("delta_b", lambda v: v > delta0, f"> delta0 = {delta0!r}"),
+                             ("softening", lambda v: v >= 0, ">= 0 (in a)")):
             if key in p:
                 v = p[key]
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not ok(v) or v != v:
@@ -223,6 +273,80 @@ def random_field(n: int, cv: float, correlation: float, seed: int) -> np.ndarray
     return np.array([math.exp(x) for x in (math.sqrt(s2) * g - 0.5 * s2).tolist()])
 
 
+def site_x(n_sites: int) -> np.ndarray:
+    """Where each of the n_sites interface sites stands along the contact (l): site s at (s + 1/2)/N."""
+    return (np.arange(n_sites) + 0.5) / max(n_sites, 1)
+
+
+def zone_sites(x, n_sites: int) -> tuple[int, int]:
+    """The global sites [lo, hi) of a stretch x = (from, to) of the contact (l): those with from <= x_s < to, as
+    a patch takes them (``site_x``); lo = hi when it holds none."""
+    inside = np.flatnonzero((site_x(n_sites) >= x[0]) & (site_x(n_sites) < x[1]))
+    return (int(inside[0]), int(inside[-1]) + 1) if len(inside) else (0, 0)
+
+
+@dataclass(frozen=True)
+class Nucleation:
+    """A rupture started in the contact (``interface.nucleation``; Andrews 1976, Bizzarri 2010): from ``start``
+    (l/c_r after the held prestress has settled, or after the drive's start without one), the bonds of the zone
+    x = [from, to) (l) weaken to their residual whatever their slip:
+
+      "time"    every site of the zone at once, its weakening share w rising linearly to 1 over ``duration``
+      "forced"  a front from the zone's centre grows both ways at ``speed`` (c_r) to its ends; each site it
+                reaches weakens as above over ``duration`` (0: at once), then the zone is left free
+
+    A site's forcing ends when its share reaches 1 (its bond breaks there, if it had one): a bond that
+    re-forms later is free.  Times in l/c_r, x in l, speed in c_r."""
+    kind: str                    # "time" or "forced"
+    x: tuple                     # (from, to) in l
+    duration: float = 0.0        # l/c_r: a site's forcing, from its start to its residual
+    speed: float = 0.0           # c_r: the forced front's speed ("forced")
+    start: float = 0.0           # l/c_r after the prestress settled (or after the drive's start)
+
+    KEYS = ("kind", "x", "duration", "speed", "start")
+
+    @classmethod
+    def from_scene(cls, scene: dict) -> "Nucleation | None":
+        kind = scene["interface.nucleation.kind"]
+        if kind == "none":
+            return None
+        return cls(kind=kind, x=tuple(float(v) for v in scene["interface.nucleation.x"]),
+                   duration=float(scene["interface.nucleation.duration"]),
+                   speed=float(scene["interface.nucleation.speed"]), start=float(scene["interface.nucleation.start"]))
+
+    def sites(self, n_sites: int) -> tuple[int, int]:
+        """The zone's global sites [lo, hi) (``zone_sites``)."""
+        return zone_sites(self.x, n_sites)
+
+
+def check_nucleation(scene: dict) -> None:
+    """Refuse, with one line naming the key, the value and what is accepted (ConfigError), a nucleation that
+    cannot start a rupture in the contact."""
+    from ..errors import ConfigError
+    kind = scene["interface.nucleation.kind"]
+    x = scene["interface.nucleation.x"]
+    if kind == "none":
+        return
+    ok_x = (isinstance(x, list) and len(x) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                        for v in x))
+    if not ok_x or not 0.0 <= x[0] < x[1] <= 1.0:
+        why = ("not [from, to]" if not ok_x else "reversed or empty" if x[0] >= x[1]
+               else "outside the contact [0, 1]")
+        raise ConfigError(f"interface.nucleation.x = {x!r}: {why}; accepted: [from, to] in l, 0 <= from < to <= 1 "
+                          f"(the zone of the contact the nucleation weakens)")
+    n = scene["lattice.top_cols"]
+    lo, hi = Nucleation(kind, tuple(x)).sites(n)
+    if hi <= lo:
+        raise ConfigError(f"interface.nucleation.x = {x!r}: holds no interface site (site s stands at (s + 1/2)/"
+                          f"{n} l); accepted: a zone [from, to] that holds at least one")
+    if scene["lattice.bottom_rows"] == 0:
+        raise ConfigError(f"interface.nucleation.kind = {kind!r}: a free block (lattice.bottom_rows = 0) has no "
+                          f"contact; accepted: 'none' without a substrate")
+    if kind == "forced" and not scene["interface.nucleation.speed"] > 0:
+        raise ConfigError(f"interface.nucleation.speed = {scene['interface.nucleation.speed']!r}: a forced "
+                          f"nucleation grows at this speed; accepted: > 0 (in c_r) with kind = 'forced'")
+
+
 @dataclass(frozen=True)
 class InterfaceLaw:
     """The adhesive bonds of one scene (see the module docstring); lengths in a, stiffnesses in m c^2/a^2."""
@@ -238,6 +362,9 @@ class InterfaceLaw:
     patches: tuple = ()          # ((from, to), {"kx"|"ky"|"delta_b": value}) in order
     random: tuple = ()           # (key, cv, correlation in a, seed), or () for none
     contact: float = 0.0         # m c^2/a^2: an unbonded site's contact stiffness (0: none, the paper)
+    softening: float = 0.0       # a: D_c, the weakening distance past the peak (0: the paper's break)
+    friction: float = 0.0        # mu, the contact's friction coefficient (0: none)
+    nucleation: Nucleation | None = None
 
     @classmethod
     def from_scene(cls, scene: dict) -> "InterfaceLaw":
@@ -253,7 +380,8 @@ class InterfaceLaw:
                    random=((scene["interface.random.key"], float(scene["interface.random.cv"]),
                             float(scene["interface.random.correlation"]), int(scene["interface.random.seed"]))
                            if scene["interface.random.cv"] > 0 else ()),
-                   contact=float(scene["interface.contact"]))
+                   contact=float(scene["interface.contact"]), softening=float(scene["interface.softening"]),
+                   nucleation=Nucleation.from_scene(scene))
 
     @property
     def uniform(self) -> bool:
@@ -265,13 +393,31 @@ class InterfaceLaw:
         """The healing rule's bits (HEAL_SPEED, HEAL_TIME); 0 re-bonds at once."""
         return (HEAL_SPEED if self.heal_speed > 0 else 0) | (HEAL_TIME if self.heal_time > 0 else 0)
 
+    @property
+    def soften(self) -> int:
+        """SOFTEN when some bond may weaken (a site's D_c > 0 or a nucleation), else 0 (the paper's break)."""
+        return SOFTEN if self.nucleation is not None or self.softening > 0 or any(
+            dict(values).get("softening", 0) > 0 for _, values in self.patches) else 0
+
     def rules(self, dtype, setup) -> Rules:
         """The scalars the compiled update reads, lengths in the float type ``dtype``; ``setup`` gives the
-        time step (a/c), the velocity unit c_r and the time unit l/c_r (``scene.derive.Setup``)."""
+        time step (a/c), the velocity unit c_r, the time unit l/c_r, the sites, and whether the drive holds a
+        prestress (``scene.derive.Setup``)."""
         f = np.dtype(dtype).type
+        nuc = dict(nuc=0, nuc_lo=0, nuc_hi=0, nuc_centre=0.0, nuc_delay=0.0, nuc_steps=0, nuc_start=NEVER)
+        z = self.nucleation
+        if z is not None:
+            n = setup.lattice.n_top_sites
+            lo, hi = z.sites(n)
+            steps = setup.t_unit / setup.dt              # per l/c_r
+            nuc.update(nuc=NUCLEATION_CODES[z.kind], nuc_lo=lo, nuc_hi=hi, nuc_centre=0.5 * (z.x[0] + z.x[1]) * n,
+                       nuc_delay=(1.0 / (z.speed * setup.material.c_r * setup.dt) if z.kind == "forced" else 0.0),
+                       nuc_steps=int(round(z.duration * steps)),
+                       nuc_start=NEVER if setup.drive.prestress else setup.n_drive_start + int(round(z.start * steps)))
         return Rules(delta0=f(self.delta0), rebond_length=f(self.rebond_length), reform=self.reform,
                      rebond=self.rebond, heal=self.heal, heal_du=f(self.heal_speed * setup.material.c_r * setup.dt),
-                     n_heal=self.heal_steps(setup), contact=f(self.contact))
+                     n_heal=self.heal_steps(setup), contact=f(self.contact), soften=self.soften,
+                     mu=f(self.friction), tiny=f(np.finfo(np.dtype(dtype)).tiny), **nuc)
 
     def heal_steps(self, setup) -> int:
         """n_heal = ceil(heal_time / dt): the steps a claim must last before the site re-bonds (HEAL_TIME);
@@ -284,7 +430,7 @@ class InterfaceLaw:
         """Each site's own constants {"kx", "ky", "delta_b"}: arrays over the global sites 0..n_sites-1, the
         same on every rank (the module docstring says how they are made)."""
         out = {"kx": np.full(n_sites, self.kx), "ky": np.full(n_sites, self.ky),
-               "delta_b": np.full(n_sites, self.delta_b)}
+               "delta_b": np.full(n_sites, self.delta_b), "softening": np.full(n_sites, self.softening)}
         if self.random:
             key, cv, corr, seed = self.random
             if key == "delta_b":
@@ -292,7 +438,7 @@ class InterfaceLaw:
                 out[key] = self.delta0 + excess * random_field(n_sites, cv * self.delta_b / excess, corr, seed)
             else:
                 out[key] = out[key] * random_field(n_sites, cv, corr, seed)
-        x = (np.arange(n_sites) + 0.5) / max(n_sites, 1)
+        x = site_x(n_sites)
         for (lo, hi), values in self.patches:
             inside = (x >= lo) & (x < hi)
             for key, v in values:
@@ -300,7 +446,7 @@ class InterfaceLaw:
         return out
 
     def extremes(self, n_sites: int) -> dict:
-        """{key: (min, max)} of the sites' kx, ky, delta_b."""
+        """{key: (min, max)} of the sites' kx, ky, delta_b, softening."""
         return {k: (float(v.min()), float(v.max())) for k, v in self.site_values(n_sites).items() if len(v)}
 
     def largest(self, n_sites: int) -> dict:
@@ -308,8 +454,31 @@ class InterfaceLaw:
         omega_max (a stiffer spring anywhere raises every eigenvalue of the stiffness or leaves it), the
         longest delta_b the halo's reach."""
         if self.uniform or n_sites == 0:
-            return {"kx": self.kx, "ky": self.ky, "delta_b": self.delta_b}
+            return {"kx": self.kx, "ky": self.ky, "delta_b": self.delta_b, "softening": self.softening}
         return {k: float(v.max()) for k, v in self.site_values(n_sites).items()}
+
+    def longest_bond(self, n_sites: int) -> float:
+        """The longest a bond gets before it breaks (a), the largest over the sites of delta_b + D_c (a weakening
+        bond breaks at that length at the latest): what the halo's reach must serve."""
+        if self.uniform or n_sites == 0:
+            return self.delta_b + self.softening
+        v = self.site_values(n_sites)
+        return float((v["delta_b"] + v["softening"]).max())
+
+    def strength(self, n_sites: int, fn: float) -> dict:
+        """Each site's law at rest under the total normal load ``fn`` (m c^2/a) shared evenly by the n_sites bonds
+        (arrays over the global sites; module docstring): "gap" y = delta0 - (F_N/N)/k_y (a), "x_b" the shear
+        stretch of its peak sqrt(delta_b^2 - y^2) (a, x0 = 0), "tau_p" = k_x x_b and "tau_r" = min(mu F_N/N,
+        tau_p) (m c^2/a: forces per bond, a traction times a), "D_c" (a), and "Gamma" = tau_p x_b/2 + (tau_p -
+        tau_r) D_c/2 (m c^2/a: energy per bond over its spacing a)."""
+        v = self.site_values(n_sites)
+        normal = fn / max(n_sites, 1)
+        gap = self.delta0 - normal / v["ky"]
+        xb = np.sqrt(np.maximum(v["delta_b"] ** 2 - gap ** 2, 0.0))
+        tp = v["kx"] * xb
+        tr = np.minimum(self.friction * normal, tp)
+        return {"gap": gap, "x_b": xb, "tau_p": tp, "tau_r": tr, "D_c": v["softening"],
+                "Gamma": 0.5 * tp * xb + 0.5 * (tp - tr) * v["softening"]}
 
     def closing_load(self, sites: int) -> float:
         """N k_y delta0 (m c^2/a): the total normal load that closes the mean gap of ``sites`` bonds at rest."""
@@ -329,6 +498,8 @@ class InterfaceLaw:
             out.append("interface.patch or interface.random")
         if self.contact:
             out.append(f"interface.contact = {self.contact!r}")
+        if self.soften:
+            out.append("interface.softening or interface.nucleation")
         return out
 
     def normal_stiffness(self, ky: float) -> float:

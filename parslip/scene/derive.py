@@ -115,7 +115,8 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
                   scene["lattice.bottom_cols"], scene["interface.delta0"], scene["lattice.substrate"])
     law = InterfaceLaw.from_scene(scene)
     drive = Drive.from_scene(scene)
-    big = law.largest(lat.n_top_sites if lat.has_interface else 0)
+    n_sites = lat.n_top_sites if lat.has_interface else 0
+    big = law.largest(n_sites)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
                                          big["kx"], law.normal_stiffness(big["ky"]), **drive.stability_key())
@@ -136,9 +137,10 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     nsnap = scene["output.snapshots"] if scene["output.fields"] == "all" else 0
     snaps = () if nsnap == 0 else tuple(sorted({int(round(j * n_drive / nsnap)) for j in range(nsnap + 1)}))
     slip = scene["interface.slip_reach"]
-    link = link_of(law.rebond_length, big["delta_b"])
+    longest = law.longest_bond(n_sites)             # a weakening bond breaks at delta_b + D_c at the latest
+    link = link_of(law.rebond_length, longest)
     skin = halo_skin(scene["interface.halo_skin"], link, drive.on)
-    reach = (interface_reach(law.rebond_length, big["delta_b"], slip) if slip > 0 else
+    reach = (interface_reach(law.rebond_length, longest, slip) if slip > 0 else
              drift_reach(link, start_box(skin)))
     st = Setup(scene=scene, material=mat, lattice=lat, l=l, t_unit=t_unit, omega_max=omega, omega_method=method,
                dt_limit=limit, dt_paper=1.0 / mat.c_l, dt=dt, n_ramp=n_ramp, n_settle=n_settle,

@@ -79,6 +79,7 @@ def check_scene(s: dict) -> None:
                 f"load.FN = {fn!r}: closes the interface gap (mean gap delta0 - F_N/(N k_y) = "
                 f"{d0 - fn / (n * ky):.4g} a with N = {n} sites, k_y = {ky:g}, delta0 = {d0:g}); "
                 f"accepted: 0 <= load.FN < N k_y delta0 = {lim:.6g} (in m c^2/a)")
+    _check_prestress(s)
     if s["drive.mode"] != "none":
         lim, wave = max_v0(s)
         v0 = s["drive.v0"]
@@ -87,6 +88,41 @@ def check_scene(s: dict) -> None:
                 f"drive.v0 = {v0!r}: a {s['drive.mode']} drive cannot outrun the {wave} waves it launches "
                 f"(the strain v0/{wave} they carry would be {v0 / lim:.4g}, not below 1); accepted: 0 < drive.v0 < "
                 f"{wave} = {lim:.6g} (in c_r)")
+
+
+def _check_prestress(s: dict) -> None:
+    """Refuse a held prestress no drive can load, or read over a stretch that is not part of the contact."""
+    from ..model.interface import zone_sites
+    tau0, x = s["drive.prestress.tau0"], s["drive.prestress.x"]
+    if tau0 == 0:
+        return
+    if s["drive.mode"] == "none" or s["lattice.bottom_rows"] == 0:
+        why = "no drive (drive.mode = 'none')" if s["drive.mode"] == "none" else "no contact (a free block)"
+        raise ConfigError(f"drive.prestress.tau0 = {tau0!r}: {why} can load the interface to it; accepted: 0, or "
+                          f"tau0 > 0 with a drive and a substrate")
+    ok = (isinstance(x, list) and len(x) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                      for v in x) and 0.0 <= x[0] < x[1] <= 1.0)
+    if not ok or zone_sites(x, s["lattice.top_cols"])[1] == 0:
+        raise ConfigError(f"drive.prestress.x = {x!r}: not a stretch of the contact holding a site; accepted: "
+                          f"[from, to] in l with 0 <= from < to <= 1")
+
+
+def check_prestress_reach(st) -> None:
+    """Refuse a prestress at or above the mean peak strength of the stretch it is read over (the bonds' tau_p
+    at rest under F_N, ``model.interface.InterfaceLaw.strength``): the bonds would break before the drive
+    could hold it."""
+    held = st.drive.prestress
+    if held is None:
+        return
+    from ..model.physics import DENSITY
+    n = st.lattice.n_top_sites
+    lo, hi = held.sites(n)
+    unit = DENSITY * st.material.c_r ** 2                   # a traction of 1 rho c_r^2, as a force per a
+    strongest = float(st.law.strength(n, st.scene["load.FN"])["tau_p"][lo:hi].mean()) / unit
+    if held.tau0 >= strongest:
+        raise ConfigError(f"drive.prestress.tau0 = {held.tau0!r}: at or above the interface's mean peak strength "
+                          f"{strongest:.6g} rho c_r^2 over drive.prestress.x = {list(held.x)} (k_x sqrt(delta_b^2 - "
+                          f"gap^2) at rest under F_N), which no drive holds; accepted: 0 < tau0 < {strongest:.6g}")
 
 
 # The bond table holds the healing clock in the state's float type: float32 counts steps exactly to 2^24.
@@ -102,6 +138,7 @@ def check_setup(st) -> None:
         raise ConfigError(f"interface.heal_time = {st.law.heal_time!r}: {n_heal:.4g} steps of dt, more than a float32 "
                           f"state counts exactly (2^24); accepted: interface.heal_time <= {hi:.4g} l/c_r, or "
                           f"time.precision = 'float64'")
+    check_prestress_reach(st)
     if st.scene["drive.mode"] == "none":
         return
     step = st.v0 * st.dt

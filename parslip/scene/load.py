@@ -10,7 +10,7 @@ from typing import Any
 
 from ..errors import ConfigError
 from ..io import scenefile
-from ..model.interface import check_patches
+from ..model.interface import check_nucleation, check_patches
 from ..model.physics import max_nu
 from . import limits
 from .schema import SCHEMA
@@ -132,6 +132,7 @@ def _cross_checks(s: dict[str, Any]) -> None:
         raise ConfigError(f"interface.delta_b = {s['interface.delta_b']!r}: must exceed interface.delta0 = "
                           f"{s['interface.delta0']!r}; accepted: delta_b > delta0 (in a)")
     check_patches(s["interface.patch"], s["interface.delta0"])
+    check_nucleation(s)
     _check_rows(s)
     nu_hi = max_nu(s["material.model"])
     if s["material.nu"] > nu_hi:

@@ -47,10 +47,10 @@ SETUP_BYTES = 100
 OMEGA_BYTES = 1200
 FRAME_BUFFER_BYTES = 8 << 20     # interface frames held in memory between writes, per rank
 FRAME_SITE_BYTES = 45            # per site and frame: intact 1 + partner 4 + ux, uy, sxy, syy, fx 8 each
-FRAME_FIXED_BYTES = 8 + 360      # per frame: its step 8, the energy budget's 5 x 9 float64 (engine.loop.Frames)
+FRAME_FIXED_BYTES = 8 + 400      # per frame: its step 8, the energy budget's 5 x 10 float64 (engine.loop.Frames)
 FRAME_DRIVEN_BYTES = 8           # per OWNED driven node and frame: the force the drive applied (fdrive)
-EVENT_BYTES = 17                 # per bond event held: step 8 + site 4 + kind 1 + partner 4
-EVENT_BUFFER = 100_000           # bond events a rank holds before the ranks write them out, by default (1.7 MB)
+EVENT_BYTES = 41                 # per bond event held: step 8, site 4, kind 1, partner 4, 3 float64 (energy ...)
+EVENT_BUFFER = 100_000           # bond events a rank holds before the ranks write them out, by default (4.1 MB)
 # Steps between two agreements of the ranks (``engine.loop``: the checks of the state, the stop, the events).
 CHECK_EVERY = 256
 

@@ -86,16 +86,18 @@ SCHEMA: dict[str, Key] = {
     "interface.rebond_within": Key(0.0, float, "a", ">= 0 (0 = auto: delta0, the paper's delta_new <= delta0)",
                                    _range(0.0), "largest bond length at which a free top node re-bonds"),
     "interface.patch": Key([], list, "-", "an array of tables [[interface.patch]], each with x = [from, to] in l "
-                           "(0 <= from < to <= 1) and any of kx, ky (>= 0, > 0), delta_b (> delta0)",
+                           "(0 <= from < to <= 1) and any of kx, ky (>= 0, > 0), delta_b (> delta0), softening "
+                           "(>= 0)",
                            lambda v: isinstance(v, list),
                            "stretches of the contact with their own bond properties: a site at x (l, from the "
                            "rear edge) with from <= x < to takes the patch's values; later patches override "
                            "earlier ones and the random field"),
-    "interface.random.key": Key("delta_b", str, "-", "'kx', 'ky' or 'delta_b'", _choice("kx", "ky", "delta_b"),
+    "interface.random.key": Key("delta_b", str, "-", "'kx', 'ky', 'delta_b' or 'softening'",
+                                _choice("kx", "ky", "delta_b", "softening"),
                                 "the bond property the seeded random field varies"),
     "interface.random.cv": Key(0.0, float, "-", ">= 0 (0 = no random field)", _range(0.0),
-                               "coefficient of variation of the random field (lognormal: k_x, k_y stay positive, "
-                               "delta_b above delta0)"),
+                               "coefficient of variation of the random field (lognormal: k_x, k_y and D_c stay "
+                               "positive, delta_b above delta0)"),
     "interface.random.correlation": Key(0.0, float, "a", ">= 0 (0 = uncorrelated sites)", _range(0.0),
                                         "correlation length of the random field along the contact"),
     "interface.random.seed": Key(0, int, "-", ">= 0", _range(0),
@@ -109,6 +111,26 @@ SCHEMA: dict[str, Key] = {
     "interface.contact": Key(0.0, float, "m c^2/a^2", ">= 0 (0 = none, the paper)", _range(0.0),
                              "stiffness of the frictionless contact that keeps an unbonded top site at least "
                              "delta0 above the substrate's surface (a one-sided spring; enters omega_max)"),
+    "interface.softening": Key(0.0, float, "a", ">= 0 (0 = none: a bond breaks at its peak, the paper)", _range(0.0),
+                               "slip-weakening distance D_c: from its peak (where the length test first holds) a "
+                               "bond's shear traction falls linearly over a further slip D_c to zero, unloading "
+                               "along the secant to the origin, then it breaks; patches and the random field may "
+                               "set it per site"),
+    "interface.nucleation.kind": Key("none", str, "-", "'none', 'time' or 'forced'", _choice("none", "time", "forced"),
+                                     "a rupture started in the contact: 'time', the zone's bonds weaken to their "
+                                     "residual over nucleation.duration; 'forced', a front from the zone's centre "
+                                     "grows at nucleation.speed to its ends, each site it reaches weakening so"),
+    "interface.nucleation.x": Key([], list, "l", "[from, to] with 0 <= from < to <= 1, holding a site (with a kind)",
+                                  lambda v: isinstance(v, list), "the zone of the contact the nucleation weakens "
+                                  "(a site at x, l from the rear edge, with from <= x < to)"),
+    "interface.nucleation.duration": Key(0.0, float, "l/c_r", ">= 0 (0 = at once)", _range(0.0),
+                                         "how long a site of the zone takes to weaken to its residual once its "
+                                         "forcing starts"),
+    "interface.nucleation.speed": Key(0.0, float, "c_r", "> 0 with kind = 'forced' (0 = unused)", _range(0.0),
+                                      "the speed at which a forced nucleation's front grows from the zone's centre"),
+    "interface.nucleation.start": Key(0.0, float, "l/c_r", ">= 0", _range(0.0),
+                                      "when the nucleation starts: after the held prestress has settled "
+                                      "(drive.prestress), else after the drive's start"),
     "interface.slip_reach": Key(0.0, float, "a", ">= 0 (0 = auto: the halos follow the slip reached)", _range(0.0),
                                 "with several ranks: 0, the slabs and halos follow the interface's slip as it "
                                 "grows (rebuilt when it nears the halo's edge); > 0, fixed halos that serve this "
@@ -134,6 +156,16 @@ SCHEMA: dict[str, Key] = {
                       "push and pull only", lambda v: isinstance(v, list),
                       "the rows of the driven face the push or pull acts on, counted from the interface row 0 "
                       "(a loading point at a chosen height)"),
+    "drive.prestress.tau0": Key(0.0, float, "rho c_r^2", ">= 0 (0 = none: the drive runs to the end), below the "
+                                "interface's mean peak strength", _range(0.0),
+                                "hold a prestress: stop the drive once the interface's mean shear traction over "
+                                "drive.prestress.x (summed exactly, the same on any rank count) reaches this, and "
+                                "hold the driven face there while the lattice settles"),
+    "drive.prestress.settle": Key(2.0, float, "l/c_r", ">= 0", _range(0.0),
+                                  "how long the held prestress settles before a nucleation starts"),
+    "drive.prestress.x": Key([0.0, 1.0], list, "l", "[from, to] with 0 <= from < to <= 1, holding a site",
+                             lambda v: isinstance(v, list), "the stretch of the contact whose sites' mean shear "
+                             "traction the prestress reads (e.g. inside strong edge patches)"),
     "drive.v0": Key(1e-3, float, "c_r", "> 0", _range(0.0, lo_open=True), "drive velocity"),
     "drive.duration": Key(100.0, float, "l/c_r", "> 0", _range(0.0, lo_open=True),
                           "simulated drive time after settling"),

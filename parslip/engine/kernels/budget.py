@@ -14,6 +14,8 @@ changes it by exactly
     + 1/2 [C F(z) - C F(u)] . (u(n+1) - u(n-1)) / C the bonds' dashpots ("bonds": z - u = g (u(n) - u(n-1)))
     - the staggered energy of the bonds the step broke, + that of those it re-formed
     - the staggered energy of the contact springs the step switched off, + that of those it switched on
+    - 1/2 (k(n-1) - k(n)) s(n-1) s(n) of each weakening bond, whose shear stiffness the step lowered
+      (``interface.softening``: a bond of stiffness k(n) in step n is a spring re-formed each step)
 
 (``tests/test_energy_budget.py`` proves these forms from outside the engine).
 
@@ -32,8 +34,8 @@ makes appear or vanish.  The one-sided spring's own energy 1/2 k_c (delta0 - d)^
 delta0; its staggered form is not, by O(k_c s ds).
 
 The loop adds the per-step terms as they happen, each to a running total of its own unit (the damping to
-a column of its block, the drive's work to a driven node, breaks, re-formations and the contacts'
-switches to an interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
+a column of its block, the drive's work to a driven node, breaks, re-formations, the contacts' switches
+and the bonds' weakening to an interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
 (``loop._energies``).  A new interface term (friction, softening) is one more index below, one more row of
 ``SITE_TERMS`` if it is a running total per site, and one more dataset of ``io.contract.ENERGY_DATASETS``.
 
@@ -60,15 +62,16 @@ HI, LO = 0, 1
 #                                      by then, so sum_m f (u(m+1) - u(m-1))/2 telescopes)
 #   CONTACT                            the contact springs' staggered energy at the frame's step n (m c^2)
 #   SWITCHED                           total since the drive started of what the contacts' switches added
-W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, CONTACT, SWITCHED = range(9)
-N_TERMS = 9
-RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SWITCHED)
+#   SOFTENED                           total since the drive started of what the bonds' weakening took
+W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, CONTACT, SWITCHED, SOFTENED = range(10)
+N_TERMS = 10
+RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SWITCHED, SOFTENED)
 # The state's terms, written as their change since the drive started (their values there: ``STATE``'s order).
 STATE = (KINETIC, ELASTIC, LOAD_Y, CONTACT)
 # The running totals kept per interface site (local column of the block's interface row), the rows of
 # ``loop.Budget.sites`` [row, HI|LO, site]: row S_BROKEN holds term SITE_TERMS[S_BROKEN], and so on.
-SITE_TERMS = (BROKEN, FORMED, SWITCHED)
-S_BROKEN, S_FORMED, S_SWITCHED = range(3)
+SITE_TERMS = (BROKEN, FORMED, SWITCHED, SOFTENED)
+S_BROKEN, S_FORMED, S_SWITCHED, S_SOFTENED = range(4)
 
 # Bond masks of the row kinds (``parallel.layout``): FULL, NO_UP (top row), NO_DOWN (bottom row).
 ALL = R_ | UR_ | UL_ | L_ | DL_ | DR_

@@ -10,7 +10,9 @@ offset there).  For a top site at column g bonded to bottom site q:
 
 and the opposite force on the bottom node.  Each step, at positions u(t):
 
-1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b;
+1. a bond breaks when its length sqrt(x_ij^2 + y_ij^2) reaches delta_b; with
+   slip weakening (``interface.softening``, a nucleation) it weakens from
+   there and breaks once weakened to its residual (``_soften``);
 2. each free top site claims the nearest free bottom site within the law's
    re-bonding length R (delta0 unless set; ties: lower bottom index), among
    the substrate sites whose current x lies within R + 1/2 (SEARCH_MARGIN) of its own
@@ -43,8 +45,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ...model.interface import (BREAK, CAND, CLOCK, DELTA_B, FORM, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER,
-                                REBOND_FACING, REFORM_ZERO, X0)
+from ...model.interface import (BREAK, CAND, CLOCK, DELTA_B, FORM, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER, PEAK,
+                                REBOND_FACING, REFORM_ZERO, SLIPPED, SOFTENING, SPENT, X0)
 from ...parallel.codes import SEARCH_MARGIN
 from . import budget as bg
 from .floats import like
@@ -85,9 +87,14 @@ Iface = namedtuple("Iface", "bonds rules claim taken ext_x ext_y exb_x exb_y zer
 #   energy   the bond's stored energy at that step, 1/2 k_x (x_ij - x0)^2 + 1/2 k_y (y_ij - delta0)^2 (m c_r^2),
 #            at the positions u(n) it broke at (BREAK) or with the rest offset it formed with (FORM)
 #   traction its shear traction then, k_x (x_ij - x0)/(a rho c_r^2) (rho c_r^2), as the frames' sxy
+#   dissipated  the energy the bond's weakening took from its peak to its break (m c_r^2; ``_soften``: the
+#            staggered form the budget's softening term sums), 0 for a bond that broke at its peak and for
+#            a re-formation
 #   count    count[0]: events held.  The caller sizes the arrays for the worst case between two agreements
 #            of the ranks (2 events per OWNED site per step) and empties them before they can overflow.
-Events = namedtuple("Events", "step site kind partner energy traction count")
+# The stored energy and the traction take the bond's shear stiffness as it broke (``_bond_k``: k_x, or a
+# weakening bond's secant).
+Events = namedtuple("Events", "step site kind partner energy traction dissipated count")
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -123,6 +130,90 @@ def _heals(rules, bonds, j, q, dvx):
     return ok
 
 
+# --- Slip weakening (``model.interface``: the peak, the envelope, the secant), chosen by rules.soften --------
+
+@njit(cache=True, inline="always", _nrt=False)
+def _forced(p, n, site):
+    """The nucleation's share of the weakening of global site ``site`` at step n: (n - n_s)/n_w for n_s <= n <=
+    n_s + n_w (1 at n_s when n_w = 0), n_s the step its forcing starts (the nucleation's start, plus the
+    forced front's travel from the zone's centre), n_w = nuc_steps; -1 where and when it is not forced."""
+    if p.nuc == 0 or site < p.nuc_lo or site >= p.nuc_hi or n < p.nuc_start:
+        return -1.0
+    t = n - p.nuc_start - np.int64(np.ceil(p.nuc_delay * abs(site + 0.5 - p.nuc_centre)))
+    if t < 0 or t > p.nuc_steps:
+        return -1.0
+    return t / p.nuc_steps if p.nuc_steps > 0 else 1.0
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _bond_k(p, bonds, j, site, n, s, dy):
+    """(k, w): the shear stiffness of top site j's bond (global ``site``) at step n with shear stretch s = x_ij -
+    x0 and y_ij = dy, and its weakening share.  Undamaged (peak 0): k_x, 0.  Weakening: the secant
+    k = tau_m / (s_p + delta_m) of the envelope tau_m = tau_p - (tau_p - tau_r) w, with delta_m the largest slip
+    past the peak (its row, or |s| - s_p if larger), w = min(1, max(delta_m / D_c, the nucleation's share)),
+    tau_p = k_x s_p and tau_r = min(mu k_y max(0, delta0 - y_ij), tau_p) (``model.interface``).  Pure: with the
+    rows as step n - 1 left them it gives the stiffness step n - 1 applied (at its s, y_ij and n)."""
+    kx = bonds[KX, j]
+    peak = bonds[PEAK, j]
+    zero = like(0, kx)
+    if peak == 0:
+        return kx, zero
+    slipped = max(bonds[SLIPPED, j], abs(s) - peak)
+    dc = bonds[SOFTENING, j]
+    w = slipped / dc if dc > 0 else zero
+    w = min(max(w, like(_forced(p, n, site), kx)), like(1, kx))
+    tp = kx * peak
+    tr = min(p.mu * max(zero, bonds[KY, j] * (p.delta0 - dy)), tp)
+    return (tp - (tp - tr) * w) / (peak + slipped), w
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _shear_k(p, bonds, j, site, n, s, dy):
+    """The bond's shear stiffness at step n: k_x without slip weakening (the paper's law, read as such), else
+    ``_bond_k``'s."""
+    if p.soften:
+        return _bond_k(p, bonds, j, site, n, s, dy)[0]
+    return bonds[KX, j]
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _soften(p, bonds, j, site, n, dx, dy, dxp, dyp):
+    """Step n of top site j's bond (global ``site``; (x_ij, y_ij) = (dx, dy) at u(n), (dxp, dyp) at u(n - 1))
+    by the slip-weakening rule: an undamaged bond holds elastically below its breaking length and, unforced,
+    breaks at it when D_c = 0 (the paper); at its peak (the length test) or where the nucleation forces it, it
+    starts to weaken (peak = |x_ij - x0|, never 0); a weakening bond takes its largest slip past the peak and
+    the secant of its envelope (``_bond_k``), and breaks when w = 1 or its length reaches delta_b + D_c.
+
+    Returns (k, holds, spent): the shear stiffness the bond applies this step (or broke with), whether it
+    holds, and the energy its weakening took in the step, 1/2 (k_old - k) s(n-1) s(n) (m c^2, float64; k_old
+    the stiffness of step n - 1): the staggered energy the stiffness change takes out of the budget, which the
+    row ``spent`` sums over the bond's weakening."""
+    kx = bonds[KX, j]
+    x0 = bonds[X0, j]
+    s = dx - x0
+    db = bonds[DELTA_B, j]
+    dc = bonds[SOFTENING, j]
+    forced = _forced(p, n, site)
+    l2 = dx * dx + dy * dy
+    if bonds[PEAK, j] == 0:
+        if forced < 0 and l2 < db * db:
+            return kx, True, 0.0
+        if forced < 0 and dc == 0:
+            return kx, False, 0.0
+        bonds[PEAK, j] = max(abs(s), p.tiny)
+        bonds[SLIPPED, j] = 0
+        bonds[SPENT, j] = 0
+        k_old = kx
+    else:
+        k_old = _bond_k(p, bonds, j, site, n - 1, dxp - x0, dyp)[0]
+    bonds[SLIPPED, j] = max(bonds[SLIPPED, j], abs(s) - bonds[PEAK, j])
+    k, w = _bond_k(p, bonds, j, site, n, s, dy)
+    spent = 0.5 * (float(k_old) - float(k)) * float(dxp - x0) * float(s)
+    bonds[SPENT, j] += spent
+    lim = db + dc
+    return k, w < 1 and l2 < lim * lim, spent
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def _partner(bonds, j):
     """The substrate column site j is bonded to (-1: broken), from its float row."""
@@ -130,9 +221,10 @@ def _partner(bonds, j):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _event(it, n, j, site, kind, q, dx, dy):
-    """Append one event of top site j (local column; ``site`` global), bond (x_ij, y_ij) = (dx, dy), to the
-    record ``it.events`` (room is guaranteed by the caller's agreement)."""
+def _event(it, n, j, site, kind, q, dx, dy, kx, spent):
+    """Append one event of top site j (local column; ``site`` global), bond (x_ij, y_ij) = (dx, dy) of shear
+    stiffness ``kx``, whose weakening took ``spent`` (m c^2), to the record ``it.events`` (room is guaranteed
+    by the caller's agreement)."""
     ev, bonds, k = it.events, it.bonds, it.consts
     c = ev.count[0]
     ev.step[c] = n
@@ -141,8 +233,9 @@ def _event(it, n, j, site, kind, q, dx, dy):
     ev.partner[c] = q
     sx = dx - bonds[X0, j]
     sy = dy - it.rules.delta0
-    ev.energy[c] = (0.5 * bonds[KX, j] * sx * sx + 0.5 * bonds[KY, j] * sy * sy) * k.energy
-    ev.traction[c] = bonds[KX, j] * sx * k.traction
+    ev.energy[c] = (0.5 * kx * sx * sx + 0.5 * bonds[KY, j] * sy * sy) * k.energy
+    ev.traction[c] = kx * sx * k.traction
+    ev.dissipated[c] = spent * k.energy
     ev.count[0] = c + 1
 
 
@@ -153,9 +246,10 @@ def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites):
     tx, ty: the block's row 0 at u(t); bx, by: the substrate's interface row; the *_prev: the same at
     u(t - dt), for rules that read the slip velocity and for the budget (``kernels.budget``, pairs by local
     top column in ``sites``' rows): each break of an OWNED site adds the bond's staggered energy
-    (``kernels.budget.bond_energy``) to row S_BROKEN, each re-formation to S_FORMED; with a contact, each
-    OWNED site adds the staggered energy of its contact spring of this step to S_SWITCHED and takes off
-    that of the step before.  ``partner`` holds global
+    (``kernels.budget.bond_energy``) to row S_BROKEN, each re-formation to S_FORMED, each step of a weakening
+    bond what its weakening took to S_SOFTENED (``_soften``); with a contact, each OWNED site adds the
+    staggered energy of its contact spring of this step to S_SWITCHED and takes off that of the step before.
+    ``partner`` holds global
     bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
     (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
     there is no bond.  ``claim`` is scratch: the free sites, then their claims.  Every break and
@@ -169,7 +263,8 @@ def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites):
     if contact:                                   # before the breaks: the sites free since the step before
         _contacts_left(tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites[bg.S_SWITCHED])
     _clear(it, zero)
-    nfree = _breaks(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, sites[bg.S_BROKEN])
+    nfree = _breaks(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, sites[bg.S_BROKEN],
+                    sites[bg.S_SOFTENED])
     _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero)
     _grants(n, nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, sites[bg.S_FORMED])
     if contact:
@@ -188,9 +283,10 @@ def _clear(it, zero):
 
 
 @njit(cache=True, _nrt=False)
-def _breaks(n, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, broken):
-    """1. Breaks; the bonds that hold mark their substrate site taken and apply their force now (the
-    positions do not change within the step).  The free sites are listed in ``claim``; returns how many."""
+def _breaks(n, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, broken, softened):
+    """1. Breaks (by the length test, or with slip weakening by ``_soften``); the bonds that hold mark their
+    substrate site taken and apply their force now (the positions do not change within the step).  The
+    free sites are listed in ``claim``; returns how many."""
     g, p, bonds, reach = it.geom, it.rules, it.bonds, it.reach
     tbase, bbase, d0 = g.tbase, g.bbase, p.delta0
     site0 = tbase - g.tfirst                          # global site = local column + site0
@@ -208,15 +304,25 @@ def _breaks(n, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, broken):
                     reach[0] = j + tbase
                 continue
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-            db = bonds[DELTA_B, j]
-            if dx * dx + dy * dy < db * db:
+            kx = bonds[KX, j]
+            if p.soften:
+                dxp, dyp = _gap(j + tbase, q, txp, typ, bxp, byp, j, i, d0)
+                kx, holds, spent = _soften(p, bonds, j, j + site0, n, dx, dy, dxp, dyp)
+                if top_own and spent != 0:
+                    bg.add(softened, j, spent)
+            else:
+                db = bonds[DELTA_B, j]
+                holds = dx * dx + dy * dy < db * db
+            if holds:
                 it.taken[i] = 1
-                _apply(j, i, dx, dy, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
+                _apply(j, i, dx, dy, kx, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x,
+                       it.exb_y)
                 continue
             if top_own:
                 it.counters[BREAKS] += 1
-                _event(it, n, j, j + site0, BREAK, q, dx, dy)
-                bg.add(broken, j, _staggered_bond(j + tbase, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds))
+                _event(it, n, j, j + site0, BREAK, q, dx, dy, kx, bonds[SPENT, j] if p.soften else zero)
+                bg.add(broken, j, _staggered_bond(j + tbase, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds,
+                                                  kx))
             bonds[PARTNER, j] = -1
         it.claim[nfree] = j
         nfree += 1
@@ -313,13 +419,18 @@ def _grants(n, nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, formed):
         dx, dy = _gap(j + tbase, i + bbase, tx, ty, bx, by, j, i, d0)
         bonds[X0, j] = _rest_offset(p.reform, dx, zero)
         bonds[CLOCK, j] = 0
+        if p.soften:                                   # a re-formed bond starts undamaged
+            bonds[PEAK, j] = zero
+            bonds[SLIPPED, j] = zero
+            bonds[SPENT, j] = zero
+        kx = bonds[KX, j]
         top_own = g.town0 <= j < g.town1
-        _apply(j, i, dx, dy, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
+        _apply(j, i, dx, dy, kx, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
         if top_own:
             it.counters[FORMS] += 1
-            _event(it, n, j, j + site0, FORM, i + bbase, dx, dy)
+            _event(it, n, j, j + site0, FORM, i + bbase, dx, dy, kx, zero)
             bg.add(formed, j, _staggered_bond(j + tbase, i + bbase, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0,
-                                              bonds))
+                                              bonds, kx))
 
 
 # What ``_surface`` returns for a site with no surface under it (beyond the substrate's ends), and for one
@@ -429,12 +540,12 @@ def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _apply(j, i, dx, dy, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y):
-    """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends (k_x, k_y the
-    top site's own)."""
+def _apply(j, i, dx, dy, kx, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y):
+    """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends (k_x the bond's
+    shear stiffness this step, ``_shear_k``; k_y the top site's own)."""
     bot_own = bown0 <= i < bown1
     if top_own or bot_own:
-        fx = -bonds[KX, j] * (dx - bonds[X0, j])
+        fx = -kx * (dx - bonds[X0, j])
         fy = -bonds[KY, j] * (dy - d0)
         if top_own:
             ext_x[j] = fx
@@ -481,26 +592,30 @@ def coverage(tx, bx, g):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _staggered_bond(g, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds):
-    """The staggered energy of top site j's bond to substrate site i (global g, q) between u(n-1) and u(n)."""
+def _staggered_bond(g, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds, kx):
+    """The staggered energy of top site j's bond to substrate site i (global g, q) between u(n-1) and u(n),
+    with shear stiffness ``kx``."""
     dx1, dy1 = _gap(g, q, tx, ty, bx, by, j, i, d0)
     dx0, dy0 = _gap(g, q, txp, typ, bxp, byp, j, i, d0)
     x0 = bonds[X0, j]
-    return bg.bond_energy(bonds[KX, j], bonds[KY, j], dx0 - x0, dy0 - d0, dx1 - x0, dy1 - d0)
+    return bg.bond_energy(kx, bonds[KY, j], dx0 - x0, dy0 - d0, dx1 - x0, dy1 - d0)
 
 
 @njit(cache=True, _nrt=False)
-def staggered(tx, ty, bx, by, txp, typ, bxp, byp, it, out):
+def staggered(n, tx, ty, bx, by, txp, typ, bxp, byp, it, out):
     """out[ELASTIC] += the staggered energy of every intact bond of the OWNED top sites (``kernels.budget``),
-    with the bonds as they stand before this step's update."""
-    g, bonds = it.geom, it.bonds
-    d0 = it.rules.delta0
+    with the bonds as they stand before step n's update (a weakening bond with the stiffness step n - 1 gave
+    it, ``_shear_k`` at u(n - 1))."""
+    g, bonds, p = it.geom, it.bonds, it.rules
+    d0 = p.delta0
     for j in range(g.town0, g.town1):
         q = _partner(bonds, j)
         i = q - g.bbase
         if q >= 0 and g.blo <= i < g.bhi:
-            bg.add(out, bg.ELASTIC, _staggered_bond(j + g.tbase, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0,
-                                                    bonds))
+            gl = j + g.tbase
+            dxp, dyp = _gap(gl, q, txp, typ, bxp, byp, j, i, d0)
+            kx = _shear_k(p, bonds, j, gl - g.tfirst, n - 1, dxp - bonds[X0, j], dyp)
+            bg.add(out, bg.ELASTIC, _staggered_bond(gl, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds, kx))
 
 
 @njit(cache=True, _nrt=False)
@@ -514,12 +629,32 @@ def contact_staggered(tx, ty, bx, by, txp, typ, bxp, byp, it, out):
 
 
 @njit(cache=True, _nrt=False)
-def record(tx, ty, bx, by, it, k, fr):
-    """Frame k of the interface record for the OWNED top sites into the buffer ``fr`` (``loop.Frames``):
-    intact, partner, u/l, the traction sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho c_r^2),
-    syy = k_y (y_ij - delta0)/(a rho c_r^2), and the bond's x-force on the block f_x = -k_x (x_ij - x0)
-    (m c^2/a; 0 where broken), which the writer sums over the sites into the friction force."""
-    g, p, bonds = it.geom, it.consts, it.bonds
+def shear_sum(n, tx, ty, bx, by, it, lo, hi, quantum):
+    """The shear force k (x_ij - x0) (m c^2/a: the frames' sxy times a rho c_r^2) the bonds of this rank's OWNED
+    sites of global index in [lo, hi) carry at u(n), each rounded to a whole number of ``quantum`` and summed
+    as an integer: exact, so the ranks' sums add to the same value in any order (``engine.prestress``)."""
+    g, bonds, p = it.geom, it.bonds, it.rules
+    total = 0
+    for j in range(g.town0, g.town1):
+        site = j + g.tbase - g.tfirst
+        q = _partner(bonds, j)
+        i = q - g.bbase
+        if lo <= site < hi and q >= 0 and g.blo <= i < g.bhi:
+            dx, dy = _gap(j + g.tbase, q, tx, ty, bx, by, j, i, p.delta0)
+            s = dx - bonds[X0, j]
+            f = float(_shear_k(p, bonds, j, site, n, s, dy) * s)
+            total += np.int64(np.floor(f / quantum + 0.5))
+    return total
+
+
+@njit(cache=True, _nrt=False)
+def record(n, tx, ty, bx, by, it, k, fr):
+    """Frame k (at step n) of the interface record for the OWNED top sites into the buffer ``fr``
+    (``loop.Frames``): intact, partner, u/l, the traction sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho
+    c_r^2), syy = k_y (y_ij - delta0)/(a rho c_r^2), and the bond's x-force on the block f_x = -k_x (x_ij - x0)
+    (m c^2/a; 0 where broken), which the writer sums over the sites into the friction force; k_x is the
+    stiffness the bond has at u(n) (a weakening bond's secant, ``_shear_k``)."""
+    g, p, bonds, rules = it.geom, it.consts, it.bonds, it.rules
     tbase, town0, town1 = g.tbase, g.town0, g.town1
     bbase, blo, bhi = g.bbase, g.blo, g.bhi
     d0, inv_l, tr = it.rules.delta0, p.inv_l, p.traction
@@ -533,7 +668,8 @@ def record(tx, ty, bx, by, it, k, fr):
         i = q - bbase
         if q >= 0 and blo <= i < bhi:
             dx, dy = _gap(j + tbase, q, tx, ty, bx, by, j, i, d0)
-            sx = bonds[KX, j] * (dx - bonds[X0, j])
+            s = dx - bonds[X0, j]
+            sx = _shear_k(rules, bonds, j, j + tbase - g.tfirst, n, s, dy) * s
             fr.sxy[k, m] = sx * tr
             fr.syy[k, m] = bonds[KY, j] * (dy - d0) * tr
             fr.fx[k, m] = -sx

@@ -53,9 +53,9 @@ class _TimedWriter:
         self.out, self.seconds, self.frames = out, 0.0, 0
         self.event_seconds, self.events = 0.0, 0
 
-    def interface_frames(self, k0, count, frames, times, *rest):
+    def interface_frames(self, k0, count, frames, *args, **kw):
         t = time.perf_counter()
-        self.out.interface_frames(k0, count, frames, times, *rest)
+        self.out.interface_frames(k0, count, frames, *args, **kw)
         self.seconds += time.perf_counter() - t
         self.frames += count
 
