@@ -42,8 +42,9 @@ v = sqrt(2 mu1) c_s (sqrt 2 c_s classically, Burridge 1973; Freund 1979).
 
 Supershear with a linear cohesive zone (derived here along Broberg's route; checked against his curves below).
 *Inner problem:* a tip steady at c_s < v < c_l with a cohesive zone of length d behind it whose traction falls
-linearly in distance from tau_p to tau_r (Broberg's linear zone).  On the interface tau = C [cos(pi gamma) delta' - sin(pi gamma) H[delta']]
-(H the Hilbert transform, delta the slip, C = 2 mu1^2 alpha_l rho c_s^2 / (v^2 sin(pi gamma))); the solution
+linearly in distance from tau_p to tau_r (Broberg's linear zone).  On the interface
+tau = C [cos(pi gamma) delta' - sin(pi gamma) H[delta']] (H the Hilbert transform, delta the slip,
+C = 2 mu1^2 alpha_l rho c_s^2 / (v^2 sin(pi gamma))); the solution
 bounded at the tip has the far field tau - tau_r = K* x^-gamma with K* = sin(pi gamma) (tau_p - tau_r) d^gamma /
 (pi gamma (1 + gamma)), and its zone takes Gamma = (tau_p - tau_r)^2 d G1 / (rho c_s^2) per unit advance,
   G1 = v^2 sin^2(pi gamma) w_d / (2 pi mu1^2 alpha_l),   w_d = 1 / (3 gamma (1 - gamma) (2 - gamma)),
