@@ -1,6 +1,6 @@
 """The theory a mode II rupture between two identical solids is compared with: dynamic fracture mechanics of a
 shear crack, sub-Rayleigh and supershear, with a cohesive (slip-weakening) zone.  Pure functions of numbers:
-no run, no file.  Used by the studies of docs/studies/weakening.md, whose "Theory" section draws each of them.
+no run, no file.  docs/studies/weakening.md states the theory and tabulates its values.
 
   Solid(k, eta)                        the solid: k = c_s/c_l, eta the Born continuum's couple-stress share
   Solid.isotropic(nu, model), Solid.born(kn, kt), Solid.of(material)
@@ -324,7 +324,7 @@ def energy_ratio(v, d_over_a, solid: Solid):
         G/G_0 = 2 G1 G2^2 (d/a)^(1 - 2 gamma) / (pi H(0)),
 
     0 in the singular limit d/a -> 0 except at gamma = 1/2 (v = sqrt(2 mu1) c_s), where it does not depend on d.
-    NaN between c_R and c_s (no steady tip there)."""
+    NaN between c_R and c_s (no steady tip there).  ``d_over_a`` is one number (not used below c_R)."""
     vv, scalar = _speeds(v)
     out = np.full(vv.shape, math.nan)
     sub = vv < solid.c_R
