@@ -1,12 +1,13 @@
 """The dynamic fracture formulas of ``analysis.lefm`` against limits, closed forms and independent computations:
 the surface waves against ``model.physics``'s own roots, the steady compliance against the Stroh computation of
 ``analysis.cracks`` and Freund's formula, the cohesive zone's integral against quadrature, the supershear
-solution's normalisation along the real axis against the imaginary-axis one, and Eq. 1's inverse against itself.
-(The agreement with the public implementation's master curves is in the module docstring, measured outside the
-suite: their tables are not stored here.)"""
+solution's normalisation along the real axis against the imaginary-axis one, Eq. 1's inverse against itself,
+Broberg's supershear factors against published master curves, and the numbers docs/studies/weakening.md prints
+against the module."""
 from __future__ import annotations
 
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -268,3 +269,51 @@ def test_the_lefm_zone_of_the_linear_slip_law():
     assert lefm.lefm_zone(0.0, s, tau_p, tau_r, d_c) == pytest.approx(x0, rel=1e-14)
     v = 0.9 * s.c_R
     assert lefm.lefm_zone(v, s, tau_p, tau_r, d_c) == pytest.approx(x0 / lefm.velocity_factor(v, s), rel=1e-14)
+
+
+WEAKENING_PAGE = pathlib.Path(__file__).resolve().parents[1] / "docs" / "studies" / "weakening.md"
+
+
+def _row(cells) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def theory_tables() -> list[str]:
+    """The tables of docs/studies/weakening.md's theory section, as markdown, from this module at nu = 0.2 in
+    plane strain (c_s/c_l = 0.6124): the sub-Rayleigh functions, Broberg's supershear factors with Eq. 1's
+    L/l_0, the minimal supershear lengths, Andrews' f(S)."""
+    s = lefm.Solid.isotropic(0.2)
+    born = lefm.Solid.of(BORN)
+    sub = [_row(["v/c_R", "A_II", "k_II", "G/G_0", "X_c/X_c0", "X_c/X_c0, Born continuum"]), _row(["---"] * 6)]
+    for f in (0.2, 0.5, 0.8, 0.9, 0.95):
+        v = f * s.c_R
+        sub.append(_row([f"{f:g}"] + [f"{float(x):.4f}" for x in (
+            lefm.velocity_factor(v, s), lefm.expanding_k(v, s), lefm.energy_ratio(v, 0.0, s),
+            lefm.zone_contraction(v, s), lefm.zone_contraction(f * born.c_R, born))]))
+    sup = [_row(["v/c_s", "gamma", "G1", "G2", "G1 G2^(1/gamma)", "L/l_0, r = 0.2", "r = 0.3", "r = 0.4"]),
+           _row(["---"] * 8)]
+    for v in (1.05, 1.1, 1.2, 1.3, math.sqrt(2), 1.5, 1.6):
+        b = lefm.broberg(v, s)
+        sup.append(_row([f"{v:.4g}"] + [f"{b[key]:.4f}" for key in ("gamma", "G1", "G2", "G")] +
+                        [f"{float(lefm.kammer_length(v, r, s)):.4g}" for r in (0.2, 0.3, 0.4)]))
+    mini = [_row(["r", "l_m/l_0", "v_m/c_s"]), _row(["---"] * 3)]
+    for r in (0.2, 0.3, 0.4, 0.45):
+        lm, vm = lefm.minimal_supershear_length(r, s)
+        mini.append(_row([f"{r:g}", f"{lm:.4g}", f"{vm:.4f}"]))
+    mini.append(_row([f"above {lefm.minimal_length_limit(s, tol=1e-3):.2f}", "none", ""]))
+    andrews = [_row(["S"] + [f"{S:g}" for S in (0.3, 0.5, 0.8, 1.0, 1.2)]), _row(["---"] * 6),
+               _row(["f(S)"] + [f"{float(lefm.andrews_f(S)):.2f}" for S in (0.3, 0.5, 0.8, 1.0, 1.2)])]
+    return ["\n".join(t) for t in (sub, sup, mini, andrews)]
+
+
+def test_the_weakening_page_holds_this_module_s_numbers():
+    """Each theory table of docs/studies/weakening.md is what ``theory_tables`` computes today: a change of the
+    formulas that moves a printed digit fails here until the page (and the commit it names) is regenerated
+    (``python tests/test_lefm.py`` prints the tables)."""
+    page = WEAKENING_PAGE.read_text()
+    for table in theory_tables():
+        assert table in page, f"docs/studies/weakening.md lacks or differs from:\n{table}"
+
+
+if __name__ == "__main__":
+    print("\n\n".join(theory_tables()))
