@@ -7,7 +7,7 @@ andrews_s(run, front)           Andrews' seismic ratio S = (tau_peak - tau_0) / 
                                 S ~ 1.77); the per-front field ``andrews_s`` is that median
 daughters(run)                  fronts born ahead of a running front's tip (the Burridge-Andrews daughter)
 andrews_lc, andrews_f           Andrews' (1976) critical half-length L_c and his transition factor f(S) as Xia
-                                et al. (Science 2004) fit it: L_trans = f(S) L_c
+                                et al. (Science 2004) fit it: L_trans = f(S) L_c (the formulas live in ``lefm``)
 law_scales(setup)               a scene's own scales before any run: the law's tau_p, tau_r, Gamma, Palmer &
                                 Rice's Lambda, and with a held prestress tau_0, S and Andrews' L_c
 transition(run, front)          where a front went supershear: the distance from its nucleation at which a
@@ -30,11 +30,7 @@ import numpy as np
 from ..io.contract import EVENT_BREAK
 from ..model.physics import DENSITY
 from .fronts import Front, front_field, wave_speeds
-
-# The S below which a 2D slip-weakening crack can turn supershear and above which it never does, Andrews'
-# (1985) limit (his 1976 paper found the transition; Burridge 1973 the intersonic stress peak):
-# tau_peak - tau_0 below 1.77 (tau_0 - tau_res).
-ANDREWS_S_2D = 1.77
+from .lefm import ANDREWS_F_COEF, ANDREWS_S_2D, andrews_f, andrews_lc  # noqa: F401  (measures' formulas)
 
 
 def _sites(iface: dict, front: Front) -> np.ndarray:
@@ -134,34 +130,6 @@ def daughters(run, min_gap: float = 0.02, **kw) -> list[dict]:
                 out.append({"mother": i, "daughter": j, "t": d.nucleation_time, "x": d.nucleation_x,
                             "ahead": float(ahead)})
     return out
-
-
-# Xia, Rosakis & Kanamori (Science 2004): their fit to Andrews' (1976) transition lengths of a 2D slip-weakening
-# crack, L_trans / L_c = 9.8 (1.77 - S)^-3.
-ANDREWS_F_COEF = 9.8
-
-
-def andrews_f(S):
-    """Andrews' transition factor f(S) = L_trans / L_c = 9.8 (1.77 - S)^-3 (Xia et al. 2004's fit to Andrews
-    1976, Fig. 6); NaN from S = 1.77 up (no transition in 2D) and for NaN."""
-    S = np.asarray(S, float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(S < ANDREWS_S_2D, ANDREWS_F_COEF / (ANDREWS_S_2D - S) ** 3, math.nan)
-
-
-def andrews_lc(modulus: float, tau_p, tau_0, tau_res, d_c):
-    """Andrews' (1976) critical half-length of a mode II slip-weakening crack (units of d_c):
-
-        L_c = M (tau_p - tau_res) D_c / (pi (tau_0 - tau_res)^2)
-
-    the Griffith half-length of a crack under the stress drop tau_0 - tau_res (K_II = (tau_0 - tau_res)
-    sqrt(pi L), G = K_II^2 / (2 M)) whose fracture energy is that of the linear slip-weakening law,
-    Gamma = (tau_p - tau_res) D_c / 2.  M is the static mode II modulus, G = K^2 / (2 M): mu / (1 - nu) in
-    plane strain, mu (1 + nu) in plane stress, which is Xia et al.'s (1 + nu) / pi form; for the Born lattice
-    ``cracks.mode2_compliance`` gives 1 / M.  Tractions and M in one unit (stress), d_c a length."""
-    drop = np.asarray(tau_0, float) - np.asarray(tau_res, float)
-    return modulus * (np.asarray(tau_p, float) - np.asarray(tau_res, float)) * np.asarray(d_c, float) / \
-        (math.pi * drop * drop)
 
 
 def law_scales(setup) -> dict:
