@@ -90,11 +90,7 @@ def rebuild(sim, writer):
     st = sim.setup
     ext, growth = _agreed_drift(sim)
     drift = follow_box(old.reach.drift, ext, growth, st.skin, L.DRIFT_QUANTA)
-    layout = build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode)
-    tables = redistribute(sim.comm, st.lattice, placement(old), placement(layout), state_tables(sim))
-    relayout(sim, layout)
-    take_tables(sim, tables)
-    sim.refill_halos()
+    move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
     # The extremes at this agreement, relative to the new shift: where the next agreement's growth counts from.
     q = L.DRIFT_QUANTA
     moved = (drift.shift - old.reach.drift.shift) * q
@@ -105,6 +101,14 @@ def rebuild(sim, writer):
     sim.rebuilds += 1
     if writer is not None:
         writer.follow(sim.output_sites())
+
+
+def move_to(sim, layout):
+    """Collective: this rank's state at step ``sim.n`` moved to ``layout`` by global id, its halos filled."""
+    tables = redistribute(sim.comm, sim.setup.lattice, placement(sim.layout), placement(layout), state_tables(sim))
+    relayout(sim, layout)
+    take_tables(sim, tables)
+    sim.refill_halos()
 
 
 def relayout(sim, layout):
@@ -129,14 +133,14 @@ def checkpoint_attrs(sim) -> dict:
 
 
 def resume(sim, attrs: dict):
-    """Before a restart fills the state: the slabs and halos of the drift box the checkpoint was written with
+    """Collective, after a restart has filled the state in the slabs of no drift (the checkpoint's): the slabs
+    and halos of the drift box the checkpoint was written with, the state migrating to them by global id
     (a checkpoint without one, or a run that does not follow the drift, keeps the first layout)."""
     if not sim.params.follow or "halo_drift" not in attrs:
         return
     v = [float(x) for x in attrs["halo_drift"]]
     drift = Drift(int(v[0]), (v[1], v[2]), (v[3], v[4]), tuple(v[5:9]))
-    st = sim.setup
-    relayout(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(sim.layout.reach.link, drift),
-                               st.drive.mode))
+    st, old = sim.setup, sim.layout
+    move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
     sim.diag.halo[:] = np.asarray(attrs["halo_record"], np.int64)
     sim.rebuilds = int(attrs["halo_rebuilds"])
