@@ -141,6 +141,7 @@ def resume(sim, attrs: dict):
     v = [float(x) for x in attrs["halo_drift"]]
     drift = Drift(int(v[0]), (v[1], v[2]), (v[3], v[4]), tuple(v[5:9]))
     st, old = sim.setup, sim.layout
-    move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
+    if drift != old.reach.drift:         # the box was rebuilt before the checkpoint: its slabs and halos
+        move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
     sim.diag.halo[:] = np.asarray(attrs["halo_record"], np.int64)
     sim.rebuilds = int(attrs["halo_rebuilds"])
