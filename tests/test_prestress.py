@@ -100,6 +100,9 @@ def test_a_held_nucleated_run_is_rank_invariant_and_restarts_on_another_rank_cou
     ("interface.softening=-0.1", "interface.softening = -0.1: out of range (in a); accepted: >= 0"),
     ("interface.patch=[{x=[0.4,0.6], softening=-1.0}]", "interface.patch[0].softening = -1.0: out of range; "
                                                         "accepted: >= 0 (in a)"),
+    ("interface.contact_friction=-0.5", "interface.contact_friction = -0.5: out of range"),
+    ("interface.contact_friction=0.5", "interface.contact_friction = 0.5: friction needs the contact's normal "
+                                       "force"),
     ("drive.prestress.tau0=0.2", "drive.prestress.tau0 = 0.2: at or above the interface's mean peak strength"),
     ("drive.prestress.x=[0.5,0.5]", "drive.prestress.x = [0.5, 0.5]: not a stretch of the contact"),
     ("interface.nucleation.x=[0.8,1.3]", "interface.nucleation.x = [0.8, 1.3]: outside the contact [0, 1]"),

@@ -99,8 +99,9 @@ def _rupture_lines(st) -> list[str]:
     law, held, z = st.law, st.drive.prestress, st.law.nucleation
     k = law_scales(st)
     where = f" over x = {list(held.x)} l" if held is not None else ""
-    out = [_line("weakening", f"D_c = {k['D_c']:.4g} a past the peak, secant unloading" if law.soften else
-                 "none: a bond breaks at its peak (interface.softening = 0)"),
+    out = [_line("weakening", (f"D_c = {k['D_c']:.4g} a past the peak, secant unloading" if law.soften else
+                               "none: a bond breaks at its peak (interface.softening = 0)")
+                 + (f"; contact friction mu = {law.friction:g}" if law.friction else "")),
            _line("law scales", f"tau_p = {k['tau_p']:.4g}, tau_r = {k['tau_r']:.4g} rho c_r^2, Gamma = "
                                f"{k['Gamma']:.4g} m c_r^2/a at rest under F_N{where}: Lambda = 9 pi/16 M Gamma/"
                                f"(tau_p - tau_r)^2 = {k['Lambda']:.4g} a (M = {k['M']:.4g})")]

@@ -77,7 +77,8 @@ Frames = namedtuple("Frames", "intact partner ux uy sxy syy fx fdrive energy ste
 # make (``kernels.exact``: the damping since the drive started; the kinetic and bulk elastic energy of the
 # last step that ended on a frame); work per driven slot, an array [2, slots] of float pairs (hi, lo); sites
 # [row, 2, site], the running totals per interface site (local column of the block's interface row), one row
-# of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the contacts' switches, the weakening);
+# of pairs per term of ``kernels.budget.SITE_TERMS`` (broken, formed, the contacts' switches, the weakening,
+# friction);
 # base [2, N_TERMS]:
 # what a restart carried over (rank 0); prev [2, slots]: each driven slot's u(n-1) (x, y); scale [N_Q]: each
 # exact sum's quanta per m c^2 (``kernels.exact.scales``); cs: the kernels' factors with them,
@@ -504,7 +505,9 @@ def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
     if slot >= frames.step.shape[0]:
         return False
     if prm.has_iface:
-        ik.record(n, cur.tx[PAD], cur.ty[PAD], cur.bx[prm.brow], cur.by[prm.brow], iface, slot, frames)
+        br = prm.brow
+        ik.record(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],
+                  old.by[br], iface, slot, frames)
     # The drive's force in the step that ended here (0 before the drive's first step).
     on = prm.drive != 0 and n > prm.n_drive_start
     for i in range(drive.force.shape[0]):

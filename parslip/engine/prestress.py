@@ -52,12 +52,15 @@ class Hold:
         return self.next if self.pending() and self.next is not None and self.next > n else None
 
     def mean(self, sim) -> float:
-        """The mean over the stretch's sites of the shear traction they carry at u(n) (rho c_r^2); collective."""
+        """The mean over the stretch's sites of the shear traction they carry at u(n), bonds and contact friction
+        (rho c_r^2); collective."""
         s, st = sim.state, self.setup
         bx, by, tx, ty = s.level(sim.n)
+        bxp, byp, txp, typ = s.level(sim.n - 1)
         br = s.iface.geom.brow
         lo, hi = self.sites
-        mine = int(ik.shear_sum(sim.n, tx[PAD], ty[PAD], bx[br], by[br], s.iface, lo, hi, QUANTUM))
+        mine = int(ik.shear_sum(sim.n, tx[PAD], ty[PAD], bx[br], by[br], txp[PAD], typ[PAD], bxp[br], byp[br], s.iface,
+                                lo, hi, QUANTUM))
         total = mine if self.comm is None else self.comm.allreduce(mine)
         return total * QUANTUM / (hi - lo) / (DENSITY * st.material.c_r ** 2)
 

@@ -427,7 +427,7 @@ class Simulation:
                "kinetic": change[bg.KINETIC], "elastic": change[bg.ELASTIC],
                "work_normal": 0.5 * self.params.fext * (tot[:, bg.LOAD_Y] - base[bg.STATE.index(bg.LOAD_Y)]) * e,
                "contact": change[bg.CONTACT], "contact_switched": tot[:, bg.SWITCHED] * e,
-               "softening": tot[:, bg.SOFTENED] * e}
+               "softening": tot[:, bg.SOFTENED] * e, "friction": tot[:, bg.FRICTION] * e}
         balance = sum(out[k] for k in ENERGY_SOURCES) - sum(out[k] for k in ENERGY_SINKS if k != "damping")
         if self.params.drag or self.setup.damping.zeta == 0:
             out["residual"] = balance - out["damping"]

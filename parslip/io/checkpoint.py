@@ -67,7 +67,7 @@ SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "outpu
 # Keys added to the scene since checkpoints of this format were first written, with the value that gives
 # the behaviour of the code that wrote them: a checkpoint whose scene lacks such a key was written with it.
 IMPLIED = {"interface.contact": 0.0, "time.damping": "absolute", "output.energy": "balance",
-           "interface.softening": 0.0, "interface.nucleation.kind": "none",
+           "interface.softening": 0.0, "interface.contact_friction": 0.0, "interface.nucleation.kind": "none",
            "interface.nucleation.x": [], "interface.nucleation.duration": 0.0, "interface.nucleation.speed": 0.0,
            "interface.nucleation.start": 0.0, "drive.prestress.tau0": 0.0, "drive.prestress.settle": 2.0,
            "drive.prestress.x": [0.0, 1.0]}

@@ -11,10 +11,12 @@ The writer (``io.output``) creates exactly these datasets and the readers
   /interface/ux, uy   float64 [frames, sites]  displacement of the top interface nodes, in l
   /interface/sxy, syy float64 [frames, sites]  interface traction on the block, as stress in rho c_r^2:
                                                sxy = -f_x / (a rho c_r^2), syy = -f_y / (a rho c_r^2),
-                                               f the interface bond's force on the top node (0 if broken);
+                                               f the interface bond's force on the top node; where broken,
+                                               sxy is the contact friction's (0 without it) and syy 0;
                                                syy < 0 is compression
   /interface/friction_force  float64 [frames]  F_T, the sum over the interface bonds of their x-force on
-                                               the block (m c^2/a, F_N's unit), correctly rounded (the
+                                               the block, and over the unbonded sites of the contact's
+                                               friction (m c^2/a, F_N's unit), correctly rounded (the
                                                exact sum rounded once, so the same bits on any rank count
                                                and in any order; older files summed in site order):
                                                < 0 while the interface holds the block back
@@ -91,7 +93,8 @@ INTERFACE_DATASETS = {
     "syy": (np.float64, True, "rho c_r^2 (interface traction, -f_y/a; < 0 compressive)"),
     "time": (np.float64, False, "l/c_r"),
     "x": (np.float64, False, "l"),
-    "friction_force": (np.float64, False, "m c^2/a (F_N's unit): sum of the bonds' x-forces on the block"),
+    "friction_force": (np.float64, False, "m c^2/a (F_N's unit): sum of the bonds' and the contact friction's "
+                                          "x-forces on the block"),
     "drive_force": (np.float64, False, "m c^2/a: sum of the drive's x-forces on the driven nodes"),
     "mu": (np.float64, False, "-friction_force / F_N"),
 }
@@ -126,10 +129,10 @@ EVENT_DATASETS = {
 # energy (``engine.kernels.budget``): the state's terms as their change since the drive started, the works
 # and losses as their totals since then, so that the sources equal the sinks plus the residual:
 #     work_drive + work_normal + formed + contact_switched
-#         = elastic + kinetic + contact + damping + broken + softening + residual.
+#         = elastic + kinetic + contact + damping + broken + softening + friction + residual.
 ENERGY = "energy"
 ENERGY_SOURCES = ("work_drive", "work_normal", "formed", "contact_switched")
-ENERGY_SINKS = ("elastic", "kinetic", "contact", "damping", "broken", "softening")
+ENERGY_SINKS = ("elastic", "kinetic", "contact", "damping", "broken", "softening", "friction")
 ENERGY_DATASETS = {
     "work_drive": "the drive's work on the driven nodes, sum over steps of f . (u(n+1) - u(n-1))/2",
     "work_normal": "the normal load's work on the top face, the same sum",
@@ -140,15 +143,21 @@ ENERGY_DATASETS = {
     "broken": "the staggered energy of each bond at the step it broke, summed",
     "formed": "the staggered energy of each bond at the step it re-formed, summed (with its new rest offset)",
     "contact": "change of the contact springs' staggered energy 1/2 k_c s(n-1) s(n) (interface.contact; s the "
-               "compression delta0 - d of a free site's spring, set up from u(n-1)); 0 without contact",
+               "compression delta0 - d of a free site's spring, set up from u(n-1)), with contact friction "
+               "that of their stick springs too; 0 without contact",
     "contact_switched": "what the contact springs' switches added: each step sets up a free site's spring anew "
                         "from u(n) (its surface, normal and weight), so per step and site the new spring's "
                         "staggered energy at (u(n-1), u(n)) less the old one's, summed (a site that gains or "
                         "loses its contact, by a break, a re-formation or d crossing delta0, has one of the two); "
-                        "0 without contact",
+                        "with contact friction its stick spring's too, plus what friction took (so that "
+                        "contact_switched - friction is what the switches changed); 0 without contact",
     "softening": "the energy the bonds' weakening took (interface.softening): per step and weakening bond, "
                  "1/2 (k(n-1) - k(n)) s(n-1) s(n) with k its secant shear stiffness and s = x_ij - x0, summed; "
                  "0 without weakening",
+    "friction": "the energy the contact's friction took (interface.contact_friction): per step and site in "
+                "contact, k_c p (e(n-1) + e(n))/2 with e the stretch of its stick spring along the surface and p "
+                "= e(n-1) + dxi - e(n) its slip past it (dxi its slip along the surface), summed; mu times the "
+                "normal force per unit slip while it slides; 0 without friction",
     "residual": "what the other terms leave: the scheme's round-off; NaN where a term is unknown",
 }
 
@@ -163,8 +172,8 @@ def read_energy(path: str) -> dict | None:
         if g is None:
             return None
         n = int(f[INTERFACE].attrs.get("frames_written", g["residual"].shape[0]))
-        # A term the file predates (the contact's, the weakening's) reads NaN: its residual holds it, if the run
-        # had one.
+        # A term the file predates (the contact's, the weakening's, friction's) reads NaN: its residual holds it,
+        # if the run had one.
         out = {name: g[name][:n] if name in g else np.full(n, np.nan) for name in ENERGY_DATASETS}
         out["time"] = f[INTERFACE]["time"][:n]
         return out

@@ -60,7 +60,24 @@ its upward normal, r = p_top - p_q and w = r.e/|e|^2 (clipped to [0, 1]):
     f = k_c (delta0 - d) n           on the top node while d < delta0, else 0 (m c^2/a)
     -(1 - w) f, -w f                 on the substrate sites q, q + 1
 
-so momentum is conserved; the force is normal to the surface (no friction).
+so momentum is conserved; the force is normal to the surface.
+
+Contact friction (``friction`` = mu > 0, needs the contact).  A site in contact also carries a shear force of
+at most mu times its normal force k_c (delta0 - d), against its slip along the surface, through a stick
+spring of the contact's stiffness k_c along the segment's tangent t = (n_y, -n_x) (a penalty, as the
+contact's own normal spring is; Cundall & Strack's contact, the return mapping of computational contact
+mechanics).  With xi = t . (r - w e) the site's place along the surface (affine in the three nodes'
+displacements, t and w of this step) and dxi its change over the step,
+
+    e = clip(e_prev + dxi, -mu (delta0 - d), mu (delta0 - d))      the spring's stretch (a; row ``stick``)
+    f = -k_c e t                     on the top node, and -(1 - w) f, -w f on the substrate sites q, q + 1
+
+so a site slipping steadily carries mu k_c (delta0 - d) against its slip at every step (the stretch stays at
+its bound: no sign flips), and one loaded below it sticks (its spring holds it, stretched less than mu
+(delta0 - d): no creep).  The stretch is 0 while the site has no contact; where a bond breaks it starts at
+the bond's shear force k (x_ij - x0)/k_c, so that a weakened bond, at its residual mu k_y (delta0 - y_ij),
+hands over to friction without a jump when k_c = k_y.  k_c enters omega_max in the place of k_x when it is
+larger (``shear_stiffness``).
 On a rigid substrate the surface is the flat line delta0 below the rest
 height of the block's bottom row.  A contact acts over at most 1 a + the
 substrate's drift, within one ``layout.Reach.link``: the halo that serves the
@@ -73,7 +90,7 @@ whether it travels with the halo exchange, how a checkpoint stores it and
 whether the output writes it, and everything else is derived from the table
 (``BONDS``).  A new field of state is one more line in the table.
 
-Each site may have its own k_x, k_y and delta_b (delta0 stays uniform):
+Each site may have its own k_x, k_y, delta_b and softening (delta0 stays uniform):
 ``site_values`` starts from the scene's values, applies the seeded random
 field (``interface.random.*``), then the patches (``interface.patch``, later
 ones over earlier ones).  Site s stands at x = (s + 1/2)/N in l and belongs to
@@ -86,8 +103,8 @@ excess over delta0 is the lognormal part):
            that its correlation is exp(-r^2 / (2 correlation^2)) (r, correlation in a); then
            standardised over the contact to mean 0 and standard deviation 1 exactly
     L      exp(s g - s^2/2) with s^2 = ln(1 + cv'^2): mean about 1, coefficient of variation about cv'
-    value  k L with cv' = cv for kx, ky; delta0 + (delta_b - delta0) L with cv' = cv delta_b/(delta_b -
-           delta0) for delta_b, so that delta_b's own coefficient of variation is about cv
+    value  k L with cv' = cv for kx, ky, softening; delta0 + (delta_b - delta0) L with cv' = cv delta_b/
+           (delta_b - delta0) for delta_b, so that delta_b's own coefficient of variation is about cv
 
 The field is not rescaled afterwards: its mean and cv over a contact are the
 sample's (within a few per cent of the targets for 100 sites and a
@@ -153,6 +170,8 @@ BOND_TABLE = (
     BondRow("slipped", True, None, None, "a", "softening: the largest slip past the peak so far, |x_ij - x0| "
                                               "- peak", 0.0),
     BondRow("spent", True, None, None, "m c^2", "softening: the energy the bond's weakening has taken so far", 0.0),
+    BondRow("stick", True, None, None, "a", "contact friction: the stretch of a free site's stick spring along "
+                                           "the surface (0: none)", 0.0),
 )
 # What the table implies (``bond_layout``): names (row order), travel (indices of the travelling rows),
 # checkpoint (names a checkpoint holds), dtypes ({name: checkpoint dtype}), frame_output and site_output
@@ -173,9 +192,9 @@ def bond_layout(table) -> BondLayout:
 BONDS = bond_layout(BOND_TABLE)
 BOND_ROWS = BONDS.names
 # The rows the compiled kernels index by name.
-PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B, SOFTENING, PEAK, SLIPPED, SPENT = (
+PARTNER, X0, CAND, CLOCK, KX, KY, DELTA_B, SOFTENING, PEAK, SLIPPED, SPENT, STICK = (
     BOND_ROWS.index(name) for name in ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b", "softening", "peak",
-                                       "slipped", "spent"))
+                                       "slipped", "spent", "stick"))
 
 # Kinds of a bond event (``/interface/events/kind``): the one place they are numbered.
 BREAK, FORM = 1, 2
@@ -381,7 +400,7 @@ class InterfaceLaw:
                             float(scene["interface.random.correlation"]), int(scene["interface.random.seed"]))
                            if scene["interface.random.cv"] > 0 else ()),
                    contact=float(scene["interface.contact"]), softening=float(scene["interface.softening"]),
-                   nucleation=Nucleation.from_scene(scene))
+                   friction=float(scene["interface.contact_friction"]), nucleation=Nucleation.from_scene(scene))
 
     @property
     def uniform(self) -> bool:
@@ -500,7 +519,14 @@ class InterfaceLaw:
             out.append(f"interface.contact = {self.contact!r}")
         if self.soften:
             out.append("interface.softening or interface.nucleation")
+        if self.friction:
+            out.append(f"interface.contact_friction = {self.friction!r}")
         return out
+
+    def shear_stiffness(self, kx: float) -> float:
+        """The stiffest shear spring a site can have: the bond's ``kx`` (the largest over the sites), or with
+        contact friction the contact's stick spring k_c: what enters omega_max in the bond's place."""
+        return max(kx, self.contact) if self.friction > 0 else kx
 
     def normal_stiffness(self, ky: float) -> float:
         """The stiffest normal spring a site can have, bond (``ky``, the largest over the sites) or contact:

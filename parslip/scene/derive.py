@@ -119,7 +119,8 @@ def derive(scene: dict, omega: tuple[float, str] | None = None) -> Setup:
     big = law.largest(n_sites)
     if omega is None:
         omega, method = omega_max_cached(lat, [mat.kn_bottom, mat.kn_top], [mat.kt_bottom, mat.kt_top],
-                                         big["kx"], law.normal_stiffness(big["ky"]), **drive.stability_key())
+                                         law.shear_stiffness(big["kx"]), law.normal_stiffness(big["ky"]),
+                                         **drive.stability_key())
     else:
         omega, method = omega
     damping = Damping.from_scene(scene)

@@ -127,6 +127,14 @@ def _check_rows(s: dict[str, Any]) -> None:
         raise ConfigError(f"drive.rows = {rows!r}: out of range; {accepted}")
 
 
+def _check_friction(s: dict[str, Any]) -> None:
+    mu = s["interface.contact_friction"]
+    if mu > 0 and not s["interface.contact"] > 0:
+        raise ConfigError(f"interface.contact_friction = {mu!r}: friction needs the contact's normal force, and "
+                          f"interface.contact = {s['interface.contact']!r}; accepted: 0, or any mu >= 0 with "
+                          f"interface.contact > 0")
+
+
 def _cross_checks(s: dict[str, Any]) -> None:
     if s["interface.delta_b"] <= s["interface.delta0"]:
         raise ConfigError(f"interface.delta_b = {s['interface.delta_b']!r}: must exceed interface.delta0 = "
@@ -134,6 +142,7 @@ def _cross_checks(s: dict[str, Any]) -> None:
     check_patches(s["interface.patch"], s["interface.delta0"])
     check_nucleation(s)
     _check_rows(s)
+    _check_friction(s)
     nu_hi = max_nu(s["material.model"])
     if s["material.nu"] > nu_hi:
         raise ConfigError(f"material.nu = {s['material.nu']!r}: gives k_t < 0 in {s['material.model']}; "

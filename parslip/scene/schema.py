@@ -113,9 +113,15 @@ SCHEMA: dict[str, Key] = {
                              "delta0 above the substrate's surface (a one-sided spring; enters omega_max)"),
     "interface.softening": Key(0.0, float, "a", ">= 0 (0 = none: a bond breaks at its peak, the paper)", _range(0.0),
                                "slip-weakening distance D_c: from its peak (where the length test first holds) a "
-                               "bond's shear traction falls linearly over a further slip D_c to zero, unloading "
-                               "along the secant to the origin, then it breaks; patches and the random field may "
-                               "set it per site"),
+                               "bond's shear traction falls linearly over a further slip D_c to the residual (mu "
+                               "times its normal force with interface.contact_friction, else 0), unloading along "
+                               "the secant to the origin, then it breaks; patches and the random field may set it "
+                               "per site"),
+    "interface.contact_friction": Key(0.0, float, "-", ">= 0 (0 = none: a frictionless contact); > 0 needs "
+                                      "interface.contact > 0", _range(0.0),
+                                      "Coulomb friction coefficient mu of the contact: a site in contact carries a "
+                                      "shear traction of at most mu times its contact's normal force, against its "
+                                      "slip; also sets the residual of a weakening bond (mu times its normal force)"),
     "interface.nucleation.kind": Key("none", str, "-", "'none', 'time' or 'forced'", _choice("none", "time", "forced"),
                                      "a rupture started in the contact: 'time', the zone's bonds weaken to their "
                                      "residual over nucleation.duration; 'forced', a front from the zone's centre "

@@ -16,6 +16,9 @@ changes it by exactly
     - the staggered energy of the contact springs the step switched off, + that of those it switched on
     - 1/2 (k(n-1) - k(n)) s(n-1) s(n) of each weakening bond, whose shear stiffness the step lowered
       (``interface.softening``: a bond of stiffness k(n) in step n is a spring re-formed each step)
+    - k_c p (e(n-1) + e(n))/2 per site in contact with friction (``interface.contact_friction``): its stick
+      spring 1/2 k_c (xi - a)^2 along the surface, of stretch e = xi - a, slips by p past it (its anchor a
+      moves); the springs it replaces are switched as the contact springs are
 
 (``tests/test_energy_budget.py`` proves these forms from outside the engine).
 
@@ -34,8 +37,8 @@ makes appear or vanish.  The one-sided spring's own energy 1/2 k_c (delta0 - d)^
 delta0; its staggered form is not, by O(k_c s ds).
 
 The loop adds the per-step terms as they happen, each to a running total of its own unit (the damping to
-a column of its block, the drive's work to a driven node, breaks, re-formations, the contacts' switches
-and the bonds' weakening to an interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
+a column of its block, the drive's work to a driven node, breaks, re-formations, the contacts' switches,
+the bonds' weakening and the contact's friction to an interface site: ``SITE_TERMS``), and evaluates the state terms at every interface frame
 (``loop._energies``).  A new interface term (friction, softening) is one more index below, one more row of
 ``SITE_TERMS`` if it is a running total per site, and one more dataset of ``io.contract.ENERGY_DATASETS``.
 
@@ -63,15 +66,16 @@ HI, LO = 0, 1
 #   CONTACT                            the contact springs' staggered energy at the frame's step n (m c^2)
 #   SWITCHED                           total since the drive started of what the contacts' switches added
 #   SOFTENED                           total since the drive started of what the bonds' weakening took
-W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, CONTACT, SWITCHED, SOFTENED = range(10)
-N_TERMS = 10
-RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SWITCHED, SOFTENED)
+#   FRICTION                           total since the drive started of what the contact's friction took
+W_DRIVE, DAMPING, BROKEN, FORMED, KINETIC, ELASTIC, LOAD_Y, CONTACT, SWITCHED, SOFTENED, FRICTION = range(11)
+N_TERMS = 11
+RUNNING = (W_DRIVE, DAMPING, BROKEN, FORMED, SWITCHED, SOFTENED, FRICTION)
 # The state's terms, written as their change since the drive started (their values there: ``STATE``'s order).
 STATE = (KINETIC, ELASTIC, LOAD_Y, CONTACT)
 # The running totals kept per interface site (local column of the block's interface row), the rows of
 # ``loop.Budget.sites`` [row, HI|LO, site]: row S_BROKEN holds term SITE_TERMS[S_BROKEN], and so on.
-SITE_TERMS = (BROKEN, FORMED, SWITCHED, SOFTENED)
-S_BROKEN, S_FORMED, S_SWITCHED, S_SOFTENED = range(4)
+SITE_TERMS = (BROKEN, FORMED, SWITCHED, SOFTENED, FRICTION)
+S_BROKEN, S_FORMED, S_SWITCHED, S_SOFTENED, S_FRICTION = range(5)
 
 # Bond masks of the row kinds (``parallel.layout``): FULL, NO_UP (top row), NO_DOWN (bottom row).
 ALL = R_ | UR_ | UL_ | L_ | DL_ | DR_

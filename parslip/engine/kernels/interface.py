@@ -24,7 +24,8 @@ and the opposite force on the bottom node.  Each step, at positions u(t):
    other waits a step; a re-formed bond takes its rest offset by the rule
    ``_rest_offset`` (0, or x_ij: unstressed in x);
 4. with a contact stiffness (``interface.contact``), each site still free
-   is pushed off the substrate's surface (``_contacts``); the energy budget
+   is pushed off the substrate's surface, and with contact friction held by
+   its stick spring along it (``_contacts``, ``_stick``); the energy budget
    counts each step's contact springs as springs the step re-formed
    (``kernels.budget``: ``_contacts_left`` takes off those of the step before).
 
@@ -46,7 +47,7 @@ import numpy as np
 from numba import njit
 
 from ...model.interface import (BREAK, CAND, CLOCK, DELTA_B, FORM, HEAL_SPEED, HEAL_TIME, KX, KY, PARTNER, PEAK,
-                                REBOND_FACING, REFORM_ZERO, SLIPPED, SOFTENING, SPENT, X0)
+                                REBOND_FACING, REFORM_ZERO, SLIPPED, SOFTENING, SPENT, STICK, X0)
 from ...parallel.codes import SEARCH_MARGIN
 from . import budget as bg
 from .floats import like
@@ -248,7 +249,9 @@ def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites):
     top column in ``sites``' rows): each break of an OWNED site adds the bond's staggered energy
     (``kernels.budget.bond_energy``) to row S_BROKEN, each re-formation to S_FORMED, each step of a weakening
     bond what its weakening took to S_SOFTENED (``_soften``); with a contact, each OWNED site adds the
-    staggered energy of its contact spring of this step to S_SWITCHED and takes off that of the step before.
+    staggered energy of its contact spring of this step to S_SWITCHED and takes off that of the step before,
+    the same of its stick spring with contact friction, whose slip past the spring adds what friction took
+    to S_FRICTION (``_rub``).
     ``partner`` holds global
     bottom columns (-1: broken), indexed by local top column.  Forces go on OWNED top nodes into
     (ext_x, ext_y) and on OWNED bottom nodes into (exb_x, exb_y), both by local column, zero where
@@ -268,7 +271,8 @@ def update(n, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites):
     _claims(nfree, tx, ty, bx, by, tx_prev, bx_prev, it, zero)
     _grants(n, nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, zero, sites[bg.S_FORMED])
     if contact:
-        _contacts(nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites[bg.S_SWITCHED])
+        _contacts(nfree, tx, ty, bx, by, tx_prev, ty_prev, bx_prev, by_prev, it, sites[bg.S_SWITCHED],
+                  sites[bg.S_FRICTION])
 
 
 @njit(cache=True, _nrt=False)
@@ -323,6 +327,8 @@ def _breaks(n, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, broken, softened):
                 _event(it, n, j, j + site0, BREAK, q, dx, dy, kx, bonds[SPENT, j] if p.soften else zero)
                 bg.add(broken, j, _staggered_bond(j + tbase, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds,
                                                   kx))
+            if p.mu > zero:                # friction takes over the bond's shear force (``_contacts`` bounds it)
+                bonds[STICK, j] = kx * (dx - bonds[X0, j]) / p.contact
             bonds[PARTNER, j] = -1
         it.claim[nfree] = j
         nfree += 1
@@ -423,6 +429,7 @@ def _grants(n, nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, formed):
             bonds[PEAK, j] = zero
             bonds[SLIPPED, j] = zero
             bonds[SPENT, j] = zero
+        bonds[STICK, j] = zero                         # and its site has no contact
         kx = bonds[KX, j]
         top_own = g.town0 <= j < g.town1
         _apply(j, i, dx, dy, kx, bonds, top_own, g.bown0, g.bown1, d0, it.ext_x, it.ext_y, it.exb_x, it.exb_y)
@@ -468,48 +475,87 @@ def _surface(gl, j, tx, ty, bx, by, g, d0):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
-    """The compression delta0 - n . (r - w e) (a, float64) of the contact spring (i, n, w) of top site j at the
-    positions given: affine in the three nodes' displacements, delta0 - d where the spring was set up."""
+def _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0):
+    """r - w e (a, float64): from the point at weight w along the segment of substrate sites (i, i + 1) to top
+    site j (global column ``gl``), at the positions given; affine in the three nodes' displacements."""
     rx = float(gl - (i + bbase)) + (float(tx[j]) - float(bx[i]))
     ry = float(d0) + (float(ty[j]) - float(by[i]))
     ex = 1.0 + (float(bx[i + 1]) - float(bx[i]))
     ey = float(by[i + 1]) - float(by[i])
     w = float(w)
-    return float(d0) - (float(nx) * (rx - w * ex) + float(ny) * (ry - w * ey))
+    return rx - w * ex, ry - w * ey
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
+    """The compression delta0 - n . (r - w e) (a, float64) of the contact spring (i, n, w) of top site j at the
+    positions given: affine in the three nodes' displacements, delta0 - d where the spring was set up."""
+    ox, oy = _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0)
+    return float(d0) - (float(nx) * ox + float(ny) * oy)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _along(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
+    """xi = t . (r - w e) (a, float64), t = (n_y, -n_x) the segment's unit tangent: top site j's place along the
+    surface of the contact spring (i, n, w) at the positions given, affine in the three nodes' displacements."""
+    ox, oy = _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0)
+    return float(ny) * ox - float(nx) * oy
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _stick(e_prev, gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, bbase, d0, mu):
+    """Contact friction (``model.interface``): the stick spring's stretch e = clip(e_prev + dxi, -c, c) (a,
+    float64) after the site's slip dxi = xi(u(n)) - xi(u(n-1)) along this step's surface (i, n, w, ``_along``),
+    c = mu (delta0 - d), where the spring's force k_c e reaches mu times the normal force k_c (delta0 - d).
+    Returns (e, dxi).  Pure: the rule ``_contacts`` applies, and what ``record`` reads."""
+    dxi = (_along(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0)
+           - _along(gl, j, i, nx, ny, w, txp, typ, bxp, byp, bbase, d0))
+    cap = float(mu) * (float(d0) - float(d))
+    return min(max(float(e_prev) + dxi, -cap), cap), dxi
 
 
 @njit(cache=True, inline="always", _nrt=False)
 def _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it):
-    """The staggered energy (``kernels.budget.contact_energy``) at (u(n-1), u(n)) of the contact spring free
-    site j had in the step before, set up from u(n-1) (the *p arrays); 0 where it had none."""
-    g, d0 = it.geom, it.rules.delta0
+    """(normal, tangential): the staggered energies (``kernels.budget.contact_energy``) at (u(n-1), u(n)) of the
+    contact spring and of the stick spring free site j had in the step before, set up from u(n-1) (the *p
+    arrays; the stick's stretch as the row holds it, e(n-1)); 0 where it had none."""
+    g, p = it.geom, it.rules
+    d0 = p.delta0
     gl = j + g.tbase
     i, nx, ny, w, d = _surface(gl, j, txp, typ, bxp, byp, g, d0)
     if i < 0 or d >= d0:
-        return 0.0
-    return bg.contact_energy(it.rules.contact, d0 - d, _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, g.bbase, d0))
+        return 0.0, 0.0
+    normal = bg.contact_energy(p.contact, d0 - d, _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, g.bbase, d0))
+    e = float(it.bonds[STICK, j])
+    if e == 0.0:
+        return normal, 0.0
+    moved = (_along(gl, j, i, nx, ny, w, tx, ty, bx, by, g.bbase, d0)
+             - _along(gl, j, i, nx, ny, w, txp, typ, bxp, byp, g.bbase, d0))
+    return normal, bg.contact_energy(p.contact, e, e + moved)
 
 
 @njit(cache=True, _nrt=False)
 def _contacts_left(tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
     """Each OWNED site free since the step before (partner -1 before the breaks) takes the staggered energy of
-    its contact spring of that step off ``switched``: this step replaces the spring (``_contacts``)."""
+    its contact spring and its stick spring of that step off ``switched``: this step replaces both springs
+    (``_contacts``)."""
     g, bonds = it.geom, it.bonds
     for j in range(g.town0, g.town1):
         if _partner(bonds, j) < 0:
-            e = _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it)
-            if e != 0.0:
-                bg.add(switched, j, -e)
+            e, t = _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it)
+            if e + t != 0.0:
+                bg.add(switched, j, -(e + t))
 
 
 @njit(cache=True, _nrt=False)
-def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
+def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched, rubbed):
     """4. Contact: each site still free after the grants, in increasing site order, is pushed off the
     substrate's surface (``_surface``) by f = k_c (delta0 - d) along the segment's normal when its distance
     d is below delta0; the opposite force goes to the segment's ends by the interpolation weights (1 - w,
     w).  A substrate site gathers the contacts of the sites around it in site order, after its bond's force.
-    Each OWNED site in contact adds its spring's staggered energy at (u(n-1), u(n)) to ``switched``."""
+    Each OWNED site in contact adds its spring's staggered energy at (u(n-1), u(n)) to ``switched``.  With
+    contact friction (``_rub``) its stick spring acts along the surface too; a free site out of contact has
+    no stick."""
     g, p, claim, reach = it.geom, it.rules, it.claim, it.reach
     tbase, thi, d0, kc = g.tbase, g.thi, p.delta0, p.contact
     one = like(1, d0)
@@ -524,6 +570,7 @@ def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
         if i == FAR and own and reach[0] < 0:
             reach[0] = gl
         if i < 0 or d >= d0:
+            it.bonds[STICK, j] = 0 * one
             continue
         f = kc * (d0 - d)
         if own:
@@ -537,6 +584,55 @@ def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched):
         if g.bown0 <= i + 1 < g.bown1:
             it.exb_x[i + 1] -= w * f * nx
             it.exb_y[i + 1] -= w * f * ny
+        if p.mu > 0 * one:
+            _rub(gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, it, own, switched, rubbed)
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _rub(gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, it, own, switched, rubbed):
+    """Contact friction on free site j in contact with the segment (i, n, w) at height d: its stick spring's
+    new stretch e(n) (``_stick``) into the row, its force -k_c e(n) t on the top node and -(1 - w), -w of it on
+    the segment's ends (OWNED ones).  For an OWNED site: friction took k_c p (e(n-1) + e(n))/2, p = e(n-1) +
+    dxi - e(n) the slip past the spring (``rubbed``; at a hand-over from a bond, e(n-1) is the bond's stretch
+    the row was given), and the spring's staggered energy at (u(n-1), u(n)) appears with it (``switched``:
+    the energy plus what friction took, so that ``switched`` less ``rubbed`` is what the springs' switches
+    changed; ``_contacts_left`` takes the spring off when the next step replaces it)."""
+    g, p, bonds = it.geom, it.rules, it.bonds
+    one = like(1, p.delta0)
+    before = float(bonds[STICK, j])
+    e, dxi = _stick(bonds[STICK, j], gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, g.bbase,
+                    p.delta0, p.mu)
+    bonds[STICK, j] = e
+    ft = -p.contact * bonds[STICK, j]                      # along t = (n_y, -n_x), with the stretch the row holds
+    fx, fy = ft * ny, -ft * nx
+    if own:
+        it.ext_x[j] += fx
+        it.ext_y[j] += fy
+        es = float(bonds[STICK, j])
+        took = 0.5 * float(p.contact) * (before + dxi - es) * (before + es)
+        bg.add(rubbed, j, took)
+        bg.add(switched, j, bg.contact_energy(p.contact, es - dxi, es) + took)
+    if g.bown0 <= i < g.bown1:
+        it.exb_x[i] -= (one - w) * fx
+        it.exb_y[i] -= (one - w) * fy
+    if g.bown0 <= i + 1 < g.bown1:
+        it.exb_x[i + 1] -= w * fx
+        it.exb_y[i + 1] -= w * fy
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def _rubbing(gl, j, tx, ty, bx, by, txp, typ, bxp, byp, it):
+    """The x-force (m c^2/a) contact friction puts on free top site j in step n (``_rub``'s, the row left as it
+    is): 0 without friction or out of contact."""
+    g, p = it.geom, it.rules
+    d0 = p.delta0
+    if p.mu == 0 * d0:
+        return 0.0
+    i, nx, ny, w, d = _surface(gl, j, tx, ty, bx, by, g, d0)
+    if i < 0 or d >= d0:
+        return 0.0
+    e, _ = _stick(it.bonds[STICK, j], gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, g.bbase, d0, p.mu)
+    return float(-p.contact * like(e, d0) * ny)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -620,40 +716,49 @@ def staggered(n, tx, ty, bx, by, txp, typ, bxp, byp, it, out):
 
 @njit(cache=True, _nrt=False)
 def contact_staggered(tx, ty, bx, by, txp, typ, bxp, byp, it, out):
-    """out[CONTACT] += the staggered energy of the contact spring of every OWNED free top site
-    (``kernels.budget``), the springs of the step before (set up from u(n-1), the *p arrays)."""
+    """out[CONTACT] += the staggered energy of the contact spring and the stick spring of every OWNED free top
+    site (``kernels.budget``), the springs of the step before (set up from u(n-1), the *p arrays)."""
     g, bonds = it.geom, it.bonds
     for j in range(g.town0, g.town1):
         if _partner(bonds, j) < 0:
-            bg.add(out, bg.CONTACT, _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it))
+            normal, tangential = _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it)
+            bg.add(out, bg.CONTACT, normal + tangential)
 
 
 @njit(cache=True, _nrt=False)
-def shear_sum(n, tx, ty, bx, by, it, lo, hi, quantum):
-    """The shear force k (x_ij - x0) (m c^2/a: the frames' sxy times a rho c_r^2) the bonds of this rank's OWNED
-    sites of global index in [lo, hi) carry at u(n), each rounded to a whole number of ``quantum`` and summed
-    as an integer: exact, so the ranks' sums add to the same value in any order (``engine.prestress``)."""
+def shear_sum(n, tx, ty, bx, by, txp, typ, bxp, byp, it, lo, hi, quantum):
+    """The shear force (m c^2/a: the frames' sxy times a rho c_r^2) this rank's OWNED sites of global index in
+    [lo, hi) carry at u(n), a bond's k (x_ij - x0) or a free site's contact friction (``_rubbing``; the *p
+    arrays are u(n - 1)), each rounded to a whole number of ``quantum`` and summed as an integer: exact, so
+    the ranks' sums add to the same value in any order (``engine.prestress``)."""
     g, bonds, p = it.geom, it.bonds, it.rules
     total = 0
     for j in range(g.town0, g.town1):
         site = j + g.tbase - g.tfirst
+        if not lo <= site < hi:
+            continue
         q = _partner(bonds, j)
         i = q - g.bbase
-        if lo <= site < hi and q >= 0 and g.blo <= i < g.bhi:
+        f = 0.0
+        if q >= 0 and g.blo <= i < g.bhi:
             dx, dy = _gap(j + g.tbase, q, tx, ty, bx, by, j, i, p.delta0)
             s = dx - bonds[X0, j]
             f = float(_shear_k(p, bonds, j, site, n, s, dy) * s)
-            total += np.int64(np.floor(f / quantum + 0.5))
+        elif q < 0:
+            f = -_rubbing(j + g.tbase, j, tx, ty, bx, by, txp, typ, bxp, byp, it)
+        total += np.int64(np.floor(f / quantum + 0.5))
     return total
 
 
 @njit(cache=True, _nrt=False)
-def record(n, tx, ty, bx, by, it, k, fr):
-    """Frame k (at step n) of the interface record for the OWNED top sites into the buffer ``fr``
-    (``loop.Frames``): intact, partner, u/l, the traction sxy = k_x (x_ij - x0) / (a rho c_r^2) = -f_x/(a rho
-    c_r^2), syy = k_y (y_ij - delta0)/(a rho c_r^2), and the bond's x-force on the block f_x = -k_x (x_ij - x0)
-    (m c^2/a; 0 where broken), which the writer sums over the sites into the friction force; k_x is the
-    stiffness the bond has at u(n) (a weakening bond's secant, ``_shear_k``)."""
+def record(n, tx, ty, bx, by, txp, typ, bxp, byp, it, k, fr):
+    """Frame k (at step n; the *p arrays u(n - 1)) of the interface record for the OWNED top sites into the
+    buffer ``fr`` (``loop.Frames``): intact, partner, u/l, the traction sxy = k_x (x_ij - x0) / (a rho c_r^2) =
+    -f_x/(a rho c_r^2), syy = k_y (y_ij - delta0)/(a rho c_r^2), and the bond's x-force on the block f_x = -k_x
+    (x_ij - x0) (m c^2/a), which the writer sums over the sites into the friction force; k_x is the stiffness
+    the bond has at u(n) (a weakening bond's secant, ``_shear_k``).  Where broken, f_x and sxy are those of
+    the contact's friction in step n (``_rubbing``: 0 without it), and syy is 0 (the contact's normal force
+    is not recorded)."""
     g, p, bonds, rules = it.geom, it.consts, it.bonds, it.rules
     tbase, town0, town1 = g.tbase, g.town0, g.town1
     bbase, blo, bhi = g.bbase, g.blo, g.bhi
@@ -677,3 +782,7 @@ def record(n, tx, ty, bx, by, it, k, fr):
             fr.sxy[k, m] = 0.0
             fr.syy[k, m] = 0.0
             fr.fx[k, m] = 0.0
+            if q < 0 and rules.mu > 0:
+                fx = _rubbing(j + tbase, j, tx, ty, bx, by, txp, typ, bxp, byp, it)
+                fr.sxy[k, m] = -fx * tr
+                fr.fx[k, m] = fx
