@@ -11,6 +11,8 @@ once, when it is first imported, and the code asks ``hooks.get(NAME)``:
                             stops answering: the watchdog must fire)
   block_at=RANK:STEP        that rank skips the agreement at STEP and waits in a lone barrier instead (a
                             rank that answers heartbeats but never reaches the collective the others are in)
+  compile_error=RANK        that rank's first call of the compiled loop raises RuntimeError, as a compile that
+                            failed would (every rank must end with the same error, none left waiting)
   kill_in_checkpoint=K      the process writing the K-th checkpoint kills itself with SIGKILL halfway through
   write_error_at_frame=K    writing interface frame K or later fails with ENOSPC (a full disk)
   hold_at_frame=K           rank 0, about to write interface frame K or later, creates OUT.held and waits
@@ -32,7 +34,7 @@ VARIABLE = "PARSLIP_TEST_HOOKS"
 
 # name: how its value is read
 _PAIRS = ("raise_at", "stop_at", "block_at")
-_INTS = ("kill_in_checkpoint", "write_error_at_frame", "hold_at_frame", "hold_before_picture")
+_INTS = ("compile_error", "kill_in_checkpoint", "write_error_at_frame", "hold_at_frame", "hold_before_picture")
 
 
 def parse(text: str | None) -> dict:
