@@ -11,6 +11,8 @@ once, when it is first imported, and the code asks ``hooks.get(NAME)``:
                             stops answering: the watchdog must fire)
   block_at=RANK:STEP        that rank skips the agreement at STEP and waits in a lone barrier instead (a
                             rank that answers heartbeats but never reaches the collective the others are in)
+  compile_error=RANK        that rank's first call of the compiled loop raises RuntimeError, as a compile that
+                            failed would (every rank must end with the same error, none left waiting)
   kill_in_checkpoint=[RANK:]K  that rank (0 when not given) kills itself with SIGKILL halfway through writing
                             its share of the K-th checkpoint
   write_error_at_frame=K    writing interface frame K or later fails with ENOSPC (a full disk)
@@ -33,7 +35,7 @@ VARIABLE = "PARSLIP_TEST_HOOKS"
 
 # name: how its value is read
 _PAIRS = ("raise_at", "stop_at", "block_at")
-_INTS = ("write_error_at_frame", "hold_at_frame", "hold_before_picture")
+_INTS = ("compile_error", "write_error_at_frame", "hold_at_frame", "hold_before_picture")
 _RANK_OPTIONAL = ("kill_in_checkpoint",)        # [RANK:]K, stored as (RANK, K)
 
 

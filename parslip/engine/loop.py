@@ -57,8 +57,7 @@ from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
 from .kernels.scheme import ramp_share
-from .kernels.stencil import (K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge, row_full,
-                              row_full_called)
+from .kernels.stencil import K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge, row_full
 
 # State: each block as [row, column] arrays, x and y apart, at two Verlet levels; and the field z whose bond
 # forces the update takes with the bonds' damping (``kernels.stencil.rate_field``; 1 x 1 arrays without it).
@@ -160,7 +159,7 @@ BEAT_SIZE = 2
 DONE, FRAMES_FULL, STOPPED, EVENTS_FULL, REBUILD = 0, 1, 2, 3, 4
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")      # inlined: a call would be compiled for each set of constants
 def _flag(flags, bit, step, block, row, col, value):
     if flags[L_BITS] == 0:
         flags[L_STEP] = step
@@ -276,8 +275,11 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
         tk = tasks[t]
         r, j, s = tk.row, tk.j0, tk.s
         if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            d, k, e = row_full_called(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, 1, s, K, tk.block, damped, drag,
-                                      rated, energy, cs)   # interior node, slab edge
+            # An interior node at a slab's edge: a segment of one, by the row segments' own loops (the serial run
+            # updates it inside a segment).  The task's n, a variable: a constant 1 would compile the loops a
+            # second time, specialised on it.
+            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, tk.n, s, K, tk.block, damped, drag, rated,
+                               energy, cs)
         else:
             fx = ex[j] if tk.extra else zero
             fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
@@ -292,23 +294,30 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
     _deposit_shares(bud, ds, ks, es, energy)
 
 
-@njit(cache=True, _nrt=False)
+# Inlined into ``_step`` (twice, a few calls each), as ``_step`` is into ``advance``: numba compiles every
+# function that stays a call into a library of its own, optimises it with all it calls linked in, and then does
+# so again in each caller's library, so each level of calls between ``advance`` and the row kernels cost
+# another optimisation and code generation of all the kernels below it (about a fifth of a cold compile each).
+@njit(cache=True, _nrt=False, inline="always")
 def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
     move the halo messages halfway through (``progress``, a no-op on one rank)."""
     tasks = sched.tasks
+    # The substrate is never driven.  A variable, not the constant 0: numba compiles a function once for each
+    # constant argument, so ``_rows`` and ``_nodes`` would be compiled twice, once for each block.
+    undriven = np.int64(0)
     pb = sched.ptr[phase, 0]            # the substrate (BOTTOM) block
     pt = sched.ptr[phase, 1]            # the sliding (TOP) block
     # A call passes a few hundred bytes of array descriptors: skip the empty ones (one rank has no EARLY
     # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
     if pb[NODES] > pb[ROWS]:
         _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-              iface.exb_y, iface.zeros, drive, 0, shift, gy, bud, energy)
+              iface.exb_y, iface.zeros, drive, undriven, shift, gy, bud, energy)
     if phase == LATE:
         progress(plan)
     if pb[END] > pb[NODES]:
         _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-               iface.exb_y, drive, 0, shift, gy, bud, energy)
+               iface.exb_y, drive, undriven, shift, gy, bud, energy)
     if pt[NODES] > pt[ROWS]:
         _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
               iface.ext_y, iface.zeros, drive, drive_on, shift, gy, bud, energy)
@@ -382,7 +391,7 @@ def _loader_shift(n, prm):
     return held + prm.v0dt if prm.drive & DRIVE_SPRING else held
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline="always")
 def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
     """Step n -> n + 1: read ``cur`` (u(n)), overwrite ``nxt`` (u(n - 1)) with u(n + 1); ``n1`` is where the
     call that takes this step ends."""
@@ -624,3 +633,4 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
                 beat[BEAT_IN_LOOP] = 0
                 return n + 1, EVENTS_FULL
         n += 1
+

@@ -36,7 +36,9 @@ from . import loop as L
 PHASES = ("start", "restore", "compile", "loop", "agree", "write frames", "snapshot", "checkpoint", "finish")
 TICK_S = 0.25
 COMPILE_NOTICE_S = 2.0          # say "compiling" when the first call has taken this long
-COMPILE_EXPECTED = "about 20 s to 1 min"
+# A cold compile of the time loop, as measured (docs/developer/kernels.md, "What a compile costs"): CPU time on the
+# one rank per kernel cache that compiles (``engine.compile``); its wall time is longer on a busy machine.
+COMPILE_CPU_S = 53
 SIGNAL_GRACE_S = 5.0            # a signal not acted on by an agreement within this long (or twice the
                                 # longest gap between agreements) ends the job
 HEARTBEAT_S = 2.0               # at most; a tenth of the watchdog limit when that is shorter
@@ -170,8 +172,9 @@ class Monitor:
             if took >= COMPILE_NOTICE_S and not self._compile_said:
                 self._compile_said = now
                 if self.rank == 0:
-                    self.log.info(f"compiling the time loop for this machine ({COMPILE_EXPECTED}, once: later runs "
-                                  f"load it from numba's cache)")
+                    wait = " on one rank, the others wait" if self.size > 1 else ""
+                    self.log.info(f"compiling the time loop for this machine (about {COMPILE_CPU_S} s of CPU{wait}; "
+                                  f"once: later runs load it from numba's cache)")
             elif self._compile_said and p is not None and not p.tty and now - self._compile_said >= 30:
                 self._compile_said = now
                 self.log.info(f"still compiling the time loop ({took:.0f} s so far)")

@@ -307,8 +307,10 @@ class Job:
         from .control import CHECKPOINT, STOP
         sim = self.sim
         t_c = time.monotonic()
-        sim.compile()
+        said = sim.compile().line()
         self.timings["compile_s"] = time.monotonic() - t_c
+        if said and self.ranks.rank == 0:
+            self.log.info(said)
         self.monitor.compiled(sim.n)
         self.t_loop = time.monotonic()
         while True:

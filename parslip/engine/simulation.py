@@ -183,9 +183,17 @@ class Simulation:
 
     def compile(self):
         """The first call of the compiled loop, taking no step: numba compiles it (or loads it from its
-        cache) here, so that progress rates and the ETA never count it."""
+        cache) here, so that progress rates and the ETA never count it.  On several ranks one rank per
+        kernel cache compiles and the others then load, the snapshots' stress kernel included
+        (``engine.compile``); returns how it went (``FirstCall``).  Collective."""
+        from .compile import first_call
         self._phase("compile")
-        self.advance(self.n)
+
+        def call():
+            self.advance(self.n)
+            if self.snapshots_total:
+                self.state.node_fields(self.n)
+        return first_call(self.comm, call)
 
     def run(self, writer=None, until: int | None = None, control=None):
         """Advance to step ``until`` (default: the end), writing frames and snapshots on the way.

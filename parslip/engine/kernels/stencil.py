@@ -94,7 +94,12 @@ def _six(zx, zy, r, j0, n, s):
     return xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+# A compiled function of its own, one version for each combination of the flags (numba compiles a function once
+# for each constant argument), which LLVM inlines where it is called (``forceinline``): no call per row segment
+# (one cost 4 % of a step at l = 500), and each of the eight loops typed, lowered and optimised once.  numba's
+# own inlining (inline="always") typed, lowered and optimised each loop again at every place ``row_full`` went
+# (docs/developer/kernels.md, "What a compile costs").
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
 def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, drag, rated, energy):
     """The loop of ``row_full``, for constant (damped, drag, rated, energy): the compiler keeps one branch-free
     loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
@@ -162,16 +167,6 @@ def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, e
     return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, False)
 
 
-# Called, not inlined: for the single nodes at a slab's edge, which must give row_full's bits (the serial run
-# updates them inside a row segment).  Inlined there as well, row_full's eight loops were sixteen copies in the
-# time loop and its cold compile took 204 s of CPU; inlined only into the row segments' loop, where a call per
-# segment cost 4 % of a step at l = 500.
-@njit(cache=True, _nrt=False, fastmath={"contract"})
-def row_full_called(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs):
-    """``row_full``, as a call."""
-    return row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs)
-
-
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def _edge_force(zx, zy, xm, x0, xp, ym, y0, yp, xp_, xq_, yp_, yq_, k, kn, kt, a, b, c):
     """C F of a node of a block's top or bottom row, without external force (``row_edge``)."""
@@ -198,7 +193,7 @@ def _views(zx, zy, r, rr, j0, n, s, up):
     return xm, x0, xp, ym, y0, yp, xa, xb, ya, yb
 
 
-# Not inlined (as ``row_full_called``): a call per row segment of a block's edge rows, a few rows of many.
+# Not inlined: a call per row segment of a block's edge rows, a few rows of many.
 @njit(cache=True, _nrt=False, fastmath={"contract"})
 def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey, gx, gy, drag, rated, energy,
              cs):
