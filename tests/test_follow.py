@@ -223,6 +223,21 @@ def test_a_checkpoint_of_a_slid_block_restarts_on_another_rank_count(long_slip):
     _assert_same(datasets(out)[0], ref, "8 ranks, then 5", ("interface/", "energy/"))
 
 
+def test_a_one_rank_checkpoint_of_a_slid_block_continues_on_three(long_slip):
+    """A checkpoint written on one rank, whose halos never followed anything, of a block slid 12 a (more than
+    the skin): 3 ranks build the drift box of the slip the state holds, migrate to it, and continue the
+    one-rank run bit for bit."""
+    sc, d, ref = long_slip
+    out = d / "r1_3.vtkhdf"
+    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=10.0",
+                "--set", "checkpoint.every=2.0", timeout=LIMIT_S)
+    assert p.returncode == 0, p.stderr[-3000:]
+    p = run_cli(3, "run", sc, "--out", out, "--no-png", "--restart", f"{out}.ckpt.h5", "--watchdog", "60",
+                timeout=LIMIT_S)
+    assert p.returncode == 0, p.stderr[-3000:]
+    _assert_same(datasets(out)[0], ref, "1 rank, then 3", ("interface/", "energy/"))
+
+
 @pytest.mark.parametrize("case", range(12))
 def test_counts_in_closed_form_are_the_layouts_counts(case):
     """``parallel.counts.rank_counts`` (every rank at once, no layout built) gives each rank's nodes, sites,

@@ -23,10 +23,12 @@ each side) and rebalances the slabs as the block moves over the substrate.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..model.interface import BONDS
-from ..model.lattice import TOP
+from ..model.lattice import BOTTOM, TOP
 from ..parallel.layout import Drift, build_layout, drift_reach, follow_box
 from ..parallel.migrate import NODES, SITES, Placement, redistribute
 from . import loop as L
@@ -91,16 +93,38 @@ def rebuild(sim, writer):
     ext, growth = _agreed_drift(sim)
     drift = follow_box(old.reach.drift, ext, growth, st.skin, L.DRIFT_QUANTA)
     move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
-    # The extremes at this agreement, relative to the new shift: where the next agreement's growth counts from.
-    q = L.DRIFT_QUANTA
-    moved = (drift.shift - old.reach.drift.shift) * q
-    h = sim.diag.halo
-    for k, e in enumerate(sim.diag.gflags[L.L_DRIFT:L.L_DRIFT + 4]):
-        if e != L.NO_SITES:
-            h[L.H_PREV + k] = e - moved if k == 0 else (e + moved if k == 1 else e)
+    _count_from(sim, sim.diag.gflags[L.L_DRIFT:L.L_DRIFT + 4], drift.shift - old.reach.drift.shift)
     sim.rebuilds += 1
     if writer is not None:
         writer.follow(sim.output_sites())
+
+
+def _count_from(sim, extremes, moved: int):
+    """Record the agreed drift ``extremes`` (quanta, drift slots' order) relative to a shift grown by ``moved``
+    columns: where the next agreement's growth counts from."""
+    q = L.DRIFT_QUANTA
+    h = sim.diag.halo
+    for k, e in enumerate(extremes):
+        if e != L.NO_SITES:
+            h[L.H_PREV + k] = e - moved * q if k == 0 else (e + moved * q if k == 1 else e)
+
+
+def _drift_now(sim) -> np.ndarray:
+    """Collective: the interface rows' drift extremes at u(n) over every rank, in quanta (``loop._drift``'s
+    slots and rounding, the MAX the agreements take), from the state of slabs of no drift."""
+    lat, s = sim.setup.lattice, sim.state
+    ux = s.owned_u(sim.n)[:, 0].astype(np.float64)
+    rows = [(s.own_block == TOP) & (s.own_row == 0),
+            (s.own_block == BOTTOM) & (s.own_row == lat.bottom.rows - 1) & (not lat.rigid)]
+    ext = np.full(4, L.NO_SITES, np.int64)
+    for k, sel in enumerate(rows):
+        if sel.any():
+            v = ux[sel]
+            ext[2 * k], ext[2 * k + 1] = math.ceil(v.max() * L.DRIFT_QUANTA), math.ceil(-v.min() * L.DRIFT_QUANTA)
+    if sim.comm is not None:
+        from mpi4py import MPI
+        sim.comm.Allreduce(MPI.IN_PLACE, ext, op=MPI.MAX)
+    return ext
 
 
 def move_to(sim, layout):
@@ -113,10 +137,13 @@ def move_to(sim, layout):
 
 def relayout(sim, layout):
     """Replace this rank's arrays by zeroed ones for ``layout``, keeping what is not per node or site: the
-    event counters, the budget's exact sums and what a restart carried over, the frame cursor."""
+    event counters, the interface's rules as the run set them (a held prestress starts its nucleation by
+    setting its step there), the budget's exact sums and what a restart carried over, the frame cursor."""
     counters = sim.state.iface.counters.copy()
+    rules = sim.state.iface.rules
     acc, base = sim.budget.acc.copy(), sim.budget.base.copy()
     sim._build(layout)
+    sim.state.iface = sim.state.iface._replace(rules=rules)
     sim.state.iface.counters[:] = counters
     sim.budget.acc[:] = acc
     sim.budget.base[:] = base
@@ -136,12 +163,22 @@ def resume(sim, attrs: dict):
     """Collective, after a restart has filled the state in the slabs of no drift (the checkpoint's): the slabs
     and halos of the drift box the checkpoint was written with, the state migrating to them by global id
     (a checkpoint without one, or a run that does not follow the drift, keeps the first layout)."""
-    if not sim.params.follow or "halo_drift" not in attrs:
+    if not sim.params.follow:
         return
-    v = [float(x) for x in attrs["halo_drift"]]
-    drift = Drift(int(v[0]), (v[1], v[2]), (v[3], v[4]), tuple(v[5:9]))
     st, old = sim.setup, sim.layout
+    if "halo_drift" in attrs:
+        v = [float(x) for x in attrs["halo_drift"]]
+        drift = Drift(int(v[0]), (v[1], v[2]), (v[3], v[4]), tuple(v[5:9]))
+    else:
+        # Written by a run whose halos did not follow (one rank, or a fixed slip reach): the box of the slip
+        # the state holds, as a rebuild at this step would make it.
+        ext = _drift_now(sim)
+        drift = follow_box(old.reach.drift, [0.0 if e == L.NO_SITES else e / L.DRIFT_QUANTA for e in ext], [0.0] * 4,
+                           st.skin, L.DRIFT_QUANTA)
     if drift != old.reach.drift:         # the box was rebuilt before the checkpoint: its slabs and halos
         move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
-    sim.diag.halo[:] = np.asarray(attrs["halo_record"], np.int64)
-    sim.rebuilds = int(attrs["halo_rebuilds"])
+    if "halo_drift" in attrs:
+        sim.diag.halo[:] = np.asarray(attrs["halo_record"], np.int64)
+        sim.rebuilds = int(attrs["halo_rebuilds"])
+    else:
+        _count_from(sim, ext, drift.shift)
