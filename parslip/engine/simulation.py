@@ -190,7 +190,9 @@ class Simulation:
         self._phase("compile")
 
         def call():
+            from ..parallel.exact_sum import warm
             self.advance(self.n)
+            warm()                      # the frames' and the budget's sums
             if self.snapshots_total:
                 self.state.node_fields(self.n)
         return first_call(self.comm, call)

@@ -36,7 +36,7 @@ from ..errors import ConfigError, WriteError
 from ..model.lattice import BOTTOM, TOP
 from ..parallel.exact_sum import exact_sums
 from ..parallel.pieces import place_by_step, stream_to_root
-from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FAR_NODE, FORCE_DATASETS, FRAME_FIELDS,
+from .contract import (ENERGY, ENERGY_DATASETS, EVENT_DATASETS, EVENTS, FAR_NODE, FRAME_FIELDS,
                        INTERFACE_DATASETS, PER_FRAME_1D, SITE_DATASETS, SNAPSHOTS, STATUS, TIMING_PREFIX, VTKHDF,
                        put_status, status_value)
 from .mesh import PER_STEP, SHARED, Mesh, Share, per_step_cells, snapshot_pieces, static_pieces

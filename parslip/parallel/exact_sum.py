@@ -278,6 +278,13 @@ def _add(a, b):
     return a + b
 
 
+def warm() -> None:
+    """Run every compiled kernel of the exact sums once on a tiny sum (``engine.compile``: they are compiled
+    with the time loop, by one rank per kernel cache, instead of by every rank at its first flush)."""
+    e = Expansions.of(np.zeros((1, 2)))
+    (e + e).rounded(remainder=True)
+
+
 def exact_sums(comm, blocks: list, root: int | None = None, remainder: bool = False):
     """The correctly rounded sums, over every rank of ``comm`` and the last axis, of each array of
     ``blocks`` (shapes [..., n_i], the leading shape the same on every rank, n_i this rank's own): a list
