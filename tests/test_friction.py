@@ -13,6 +13,7 @@ from helpers import DT, NS, SMALL, blank, draw
 from parslip.analysis import friction as FR
 from parslip.analysis.results import Run
 from parslip.cli import main
+from parslip.io.contract import read_snapshot_arrays
 from parslip.model.lattice import TOP
 from parslip.scene.derive import derive
 from parslip.scene.load import load
@@ -32,8 +33,9 @@ def _block_balance(tmp_path, mode):
     nodes = lat.nodes_in_columns(0, lat.ncols)
     top = nodes["block"] == TOP
     with h5py.File(run.path, "r") as f:
-        n = int(f.attrs["n_nodes"])
-        pts, vel = f["VTKHDF/Points"][:, 0].reshape(-1, n), f["VTKHDF/PointData/velocity"][:, 0].reshape(-1, n)
+        snaps = int(f["VTKHDF/Steps"].attrs["NSteps"])
+    got = [read_snapshot_arrays(str(run.path), k) for k in range(snaps)]
+    pts, vel = np.array([g["points"][:, 0] for g in got]), np.array([g["velocity"][:, 0] for g in got])
     X = pts[:, top].mean(axis=1) - nodes["x"][top].mean()      # mean x-displacement of the block, a
     V = vel[:, top].mean(axis=1)                               # mean (u(n) - u(n-1))/dt, internal units
     assert st.frame_every == 1 and len(run.times) == st.n_drive + 1

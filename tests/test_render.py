@@ -19,18 +19,15 @@ from PIL import Image  # noqa: E402  (pillow comes with matplotlib)
 import parslip  # noqa: E402
 from parslip.plot.render import WINDOW, render_frame  # noqa: E402
 from parslip.cli import main  # noqa: E402
+from parslip.io.contract import read_snapshot_arrays  # noqa: E402
 
 
 def snapshot_from_h5(path, k):
-    """Snapshot k straight from the flat datasets: points, bonds, sxy, interface and intact flags."""
-    with h5py.File(path, "r") as f:
-        v = f["VTKHDF"]
-        N, M = int(v["NumberOfPoints"][0]), int(v["NumberOfCells"][0])
-        return {"t": float(v["Steps/Values"][k]), "points": v["Points"][k * N:(k + 1) * N],
-                "bonds": v["Connectivity"][2 * k * M:2 * (k + 1) * M].reshape(M, 2),
-                "sxy": v["PointData/sxy"][k * N:(k + 1) * N],
-                "interface": v["CellData/interface"][k * M:(k + 1) * M],
-                "intact": v["CellData/intact"][k * M:(k + 1) * M]}
+    """Snapshot k as the file's readers give it (``io.contract.read_snapshot_arrays``, which reads either
+    layout): points, bonds (node ids), sxy, interface and intact flags."""
+    s = read_snapshot_arrays(str(path), k)
+    return {"t": s["time"], "points": s["points"], "bonds": s["cells"], "sxy": s["sxy"],
+            "interface": s["interface"], "intact": s["intact"]}
 
 
 def pure_red(img):

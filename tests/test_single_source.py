@@ -84,13 +84,17 @@ def test_the_bond_table_implies_the_exchange_the_checkpoint_and_the_output():
     from parslip.io import checkpoint, contract
     from parslip.model import interface as law
     names = [r.name for r in law.BOND_TABLE]
-    assert [law.PARTNER, law.X0, law.CAND, law.CLOCK, law.KX, law.KY, law.DELTA_B] == \
-        [names.index(n) for n in ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b")]
-    assert law.BONDS.travel == (law.PARTNER, law.X0, law.CAND, law.CLOCK)
+    rows = ("partner", "x0", "cand", "clock", "kx", "ky", "delta_b", "softening", "peak", "slipped", "spent",
+            "stick")
+    assert [law.PARTNER, law.X0, law.CAND, law.CLOCK, law.KX, law.KY, law.DELTA_B, law.SOFTENING, law.PEAK,
+            law.SLIPPED, law.SPENT, law.STICK] == [names.index(n) for n in rows]
+    assert law.BONDS.travel == (law.PARTNER, law.X0, law.CAND, law.CLOCK, law.PEAK, law.SLIPPED, law.SPENT,
+                                law.STICK)
     assert checkpoint.DATASETS[-len(names):] == tuple(names)
     assert law.BONDS.dtypes == {"partner": "int64", "x0": None, "cand": "int64", "clock": "int64", "kx": None,
-                                "ky": None, "delta_b": None}
-    assert "partner" in contract.FRAME_FIELDS and contract.SITE_DATASETS == ("x", "kx", "ky", "delta_b")
+                                "ky": None, "delta_b": None, "softening": None, "peak": None, "slipped": None,
+                                "spent": None, "stick": None}
+    assert "partner" in contract.FRAME_FIELDS and contract.SITE_DATASETS == ("x", "kx", "ky", "delta_b", "softening")
     drawn = law.bond_layout(law.BOND_TABLE + (law.BondRow("drawn", True, None, "site", "a", "drawn"),))
     assert drawn.travel == law.BONDS.travel + (len(names),) and drawn.checkpoint[-1] == "drawn"
     assert drawn.site_output[-1] == "drawn"

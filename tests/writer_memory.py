@@ -52,6 +52,10 @@ def main(path):
     steps = np.repeat(np.arange(EVENTS_PER_SITE) * 7, sites)            # every rank's events at the same steps
     site = np.tile(np.arange(sites) + sim.state.site0(), EVENTS_PER_SITE)
     events = (steps, site, np.ones(len(steps), np.uint8), site, rng.random(len(steps)), rng.random(len(steps)))
+    own_event_bytes = int(sum(np.asarray(e).nbytes for e in events))
+    if "fields" in inspect.signature(out.interface_events).parameters:       # events by name (the contract's)
+        events = (dict(zip(("step", "site", "kind", "partner", "energy", "traction"), events),
+                       dissipated=np.zeros(len(steps))),)
     snap = (0, 0.0, pos, vel, sig, partner) + ((far,) if "far_pos" in inspect.signature(out.snapshot).parameters
                                               else ())
     try:                                # load the exact sums' compiled kernels first: not the writer's memory
@@ -64,7 +68,7 @@ def main(path):
            "frames": peak(lambda: out.interface_frames(0, count, fr, np.zeros(count), sim.budget_frames(count))),
            "events": peak(lambda: out.interface_events(0, *events, lambda k: k * 1.0)),
            "own_snapshot_bytes": int(pos.nbytes + vel.nbytes + sig.nbytes),
-           "own_event_bytes": int(sum(np.asarray(e).nbytes for e in events)),
+           "own_event_bytes": own_event_bytes,
            "ranks": comm.Get_size(), "nodes": st.lattice.n_nodes}
     tracemalloc.stop()
     out.close()

@@ -475,10 +475,7 @@ def build_layout(lattice: Lattice, rank: int, size: int, reach: Reach | None, mo
     shift = reach.drift.shift if reach is not None and reach.drift is not None else 0
     offsets = (0, shift)
     if bounds is None:
-        bounds = partition(column_cost(lattice, shift) if cost is None else cost, size)
-    if bounds is None:
-        raise ConfigError(f"ranks = {size}: the lattice has {lattice.ncols} columns and every slab needs at "
-                          f"least one; accepted: 1 to {lattice.ncols} ranks")
+        bounds = slab_bounds(lattice, size, shift, cost)
     serial = size == 1
 
     def blocks_of(p):
@@ -530,6 +527,16 @@ def owned_site_counts(lattice: Lattice, bounds: np.ndarray, shift: int = 0) -> n
     z = np.asarray(bounds[1:], np.int64) - shift
     a[0], z[-1] = min(a[0], lo), max(z[-1], hi)
     return np.clip(np.minimum(z, hi) - np.maximum(a, lo), 0, None).astype(np.int64)
+
+
+def slab_bounds(lattice: Lattice, size: int, shift: int = 0, cost=None) -> np.ndarray:
+    """The slabs' column bounds on ``size`` ranks for the block at shift ``shift`` (``partition`` of
+    ``column_cost``, or of ``cost``); ConfigError (one line) when there are fewer columns than ranks."""
+    bounds = partition(column_cost(lattice, shift) if cost is None else cost, size)
+    if bounds is None:
+        raise ConfigError(f"ranks = {size}: the lattice has {lattice.ncols} columns and every slab needs at "
+                          f"least one; accepted: 1 to {lattice.ncols} ranks")
+    return bounds
 
 
 def max_ranks(lattice: Lattice) -> int:

@@ -90,12 +90,12 @@ def per_rank_bytes(setup, ranks: int, gather: bool = True, counts=None, bounds=N
     ``bounds`` of another decomposition than the first (a slid block's) may be given."""
     from ..model.stability import LANCZOS_MAX_DOFS
     from ..parallel.counts import rank_counts
-    from ..parallel.layout import column_cost, owned_site_counts, partition
+    from ..parallel.layout import owned_site_counts, slab_bounds
     lat = setup.lattice
     item = np.dtype(setup.dtype).itemsize
     snapshots = setup.n_snapshots > 0
     if bounds is None:
-        bounds = partition(column_cost(lat), ranks)
+        bounds = slab_bounds(lat, ranks)
     c = counts if counts is not None else rank_counts(lat, bounds, setup.reach)
     state = item * (4 * c.cells[0] + 5 * c.cells[1])     # 2 levels x (x, y), and the drive's reference (top)
     owned, sites = c.nodes, c.sites

@@ -35,9 +35,9 @@ def _case_setup(l: int, mode: str):
 
 def _counts(setup, ranks: int):
     from ...parallel.counts import rank_counts
-    from ...parallel.layout import column_cost, partition
+    from ...parallel.layout import slab_bounds
     lat = setup.lattice
-    return rank_counts(lat, partition(column_cost(lat, 0), ranks), setup.reach, (0, 0))
+    return rank_counts(lat, slab_bounds(lat, ranks), setup.reach, (0, 0))
 
 
 def exchange_latency(l: int, mode: str = "shear", seconds: float = 1.0, timeout: float = 300.0) -> dict | None:

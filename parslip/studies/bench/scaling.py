@@ -317,7 +317,7 @@ def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, sam
     rank 0's memory over the median rank's; every count in closed form (``parallel.counts``), so it takes
     seconds at thousands of ranks.  Keys as `parslip info --json` prints them."""
     from ...parallel.counts import rank_counts
-    from ...parallel.layout import Drift, column_cost, drift_reach, partition
+    from ...parallel.layout import Drift, drift_reach, slab_bounds
     from ...scene.memory import per_rank_bytes
     lat = setup.lattice
     out = {"ranks": ranks, "shifts": travel_shifts(setup, samples), "peers_max": 0, "messages_per_step": 0,
@@ -329,7 +329,7 @@ def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, sam
         if reach.drift is not None:
             d = reach.drift
             reach = drift_reach(reach.link, Drift(shift, d.top, d.bottom, d.skin))
-        bounds = partition(column_cost(lat, shift), ranks)
+        bounds = slab_bounds(lat, ranks, shift)
         c = rank_counts(lat, bounds, reach, (0, shift))
         m = step_model(c, coef)
         mem = per_rank_bytes(setup, ranks, gather, counts=c, bounds=bounds)
