@@ -4,20 +4,22 @@
 (``scaling.measure``).  From those points and two micro-benchmarks this module takes the coefficients the
 travel model charges (``scaling.Coefficients``):
 
-    node_ns            the 1-rank step time over the nodes, at the largest contact length measured
-                       (its site share, S / N < 1 %, is left in: it is what a node update costs there)
+    node_ns            the 1-rank step time over the nodes, the median over the contact lengths measured
+                       (in cache at l = 300-500, out of it at l = 1000, dominated by each row's fixed
+                       cost at l = 100; the site share, S / N < 1 %, is left in)
     pack_ns_per_value  ``bench.pack.measure``: packing and unpacking one halo value, no MPI
     latency_us         ``bench.pack.exchange`` on 2 ranks: the exchange of a step less its packing, per
                        pair of messages (a message sent and one received)
 
 and sets each measured point beside the model's step for the same decomposition (``scaling.step_model``
-on the case's counts, no drift: a case runs seconds).  A rank count above the cores shares them: the
-prediction is then multiplied by ranks / cores.  The coefficients are kept for `parslip info`
+on the case's counts, no drift: a case runs seconds).  A rank count above the cores shares them: a core
+then runs ceil(ranks / cores) ranks one after the other, and the prediction is multiplied by that.  The coefficients are kept for `parslip info`
 (``io.cache.store_coefficients``).
 """
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import time
@@ -65,11 +67,11 @@ def measured(pts, mode: str = "shear", log=print) -> Coefficients:
         return base
     big = max(one, key=lambda q: q["l"])
     st = _case_setup(big["l"], mode)
-    node_ns = big["us_per_step"] * 1e3 / st.lattice.n_nodes
+    node_ns = float(np.median([q["us_per_step"] * 1e3 / _case_setup(q["l"], mode).lattice.n_nodes for q in one]))
     pack = pack_measure(st, 2, 0, 0.5)["ns_per_value"]
     ex = exchange_latency(big["l"], mode)
     latency = base.latency_us if ex is None else max(2.0 * ex["us_per_message"], 0.0)
-    src = f"parslip bench --scaling, {time.strftime('%Y-%m-%d')}, l = {big['l']}"
+    src = f"parslip bench --scaling, {time.strftime('%Y-%m-%d')}, l = {', '.join(str(q['l']) for q in one)}"
     log(f"coefficients: node {node_ns:.3f} ns, packing {pack:.2f} ns per value, latency {latency:.2f} us "
         f"({'measured' if ex else 'assumed'})")
     return Coefficients(node_ns=node_ns, site_ns=base.site_ns * node_ns / base.node_ns, fixed_us=base.fixed_us,
@@ -79,7 +81,7 @@ def measured(pts, mode: str = "shear", log=print) -> Coefficients:
 
 def check(pts, coef: Coefficients, mode: str = "shear", cores: int | None = None) -> list[dict]:
     """Each timed point beside the travel model's step for its decomposition: l, ranks, measured and
-    predicted us per step, their ratio (ranks above ``cores`` share them: prediction x ranks / cores)."""
+    predicted us per step, their ratio (ranks above ``cores`` share them: prediction x ceil(ranks / cores))."""
     cores = cores or os.cpu_count() or 1
     rows = []
     for q in pts:
@@ -87,7 +89,7 @@ def check(pts, coef: Coefficients, mode: str = "shear", cores: int | None = None
             continue
         st = _case_setup(q["l"], mode)
         step = float(step_model(_counts(st, q["ranks"]), coef)["step"].max())
-        step *= max(q["ranks"] / cores, 1.0)
+        step *= math.ceil(q["ranks"] / cores)
         rows.append({"l": q["l"], "ranks": q["ranks"], "measured_us": q["us_per_step"], "predicted_us": step,
                      "ratio": step / q["us_per_step"]})
     return rows
