@@ -101,6 +101,18 @@ def _carry(acc, i0, i1):
 
 
 @njit(cache=True, _nrt=False)
+def _emit(scratch, n, special, flat, used, lengths, r):
+    """Row r's expansion (its n parts in ``scratch``, or one special value) appended to ``flat`` at ``used``:
+    the new end, or -1 when ``flat`` has no room (the caller grows it and starts again)."""
+    if used + n > flat.shape[0]:
+        return -1
+    for i in range(n):
+        flat[used + i] = scratch[i]
+    lengths[r] = SPECIAL if special else n
+    return used + n
+
+
+@njit(cache=True, _nrt=False)
 def _expand(values, bits, lengths, flat, scratch, acc):
     """Each row of ``values`` [rows, n] (``bits``: the same memory as int64) as an expansion: ``lengths``
     [rows] and the floats one row after the other in ``flat``; returns the floats used, or -1 when ``flat``
@@ -139,12 +151,9 @@ def _expand(values, bits, lengths, flat, scratch, acc):
         if bad:
             n = 1
             scratch[0] = special
-        if used + n > flat.shape[0]:
+        used = _emit(scratch, n, bad, flat, used, lengths, r)
+        if used < 0:
             return -1
-        for i in range(n):
-            flat[used + i] = scratch[i]
-        lengths[r] = SPECIAL if bad else n
-        used += n
     return used
 
 
@@ -172,12 +181,9 @@ def _merge(la, fa, lb, fb, lengths, flat, scratch):
             special = False
         ia += na
         ib += nb
-        if used + n > flat.shape[0]:
+        used = _emit(scratch, n, special, flat, used, lengths, r)
+        if used < 0:
             return -1
-        for i in range(n):
-            flat[used + i] = scratch[i]
-        lengths[r] = SPECIAL if special else n
-        used += n
     return used
 
 
