@@ -126,3 +126,25 @@ def test_a_prestress_without_a_drive_is_refused(tmp_path, capsys):
     assert main(["run", str(sc), "--out", str(tmp_path / "o.vtkhdf")]) == 2
     err = capsys.readouterr().err.strip()
     assert "drive.prestress.tau0 = 0.01: no drive (drive.mode = 'none') can load the interface" in err
+
+
+def test_info_json_gives_the_law_scales_and_andrews_numbers_of_a_held_prestress(tmp_path, capsys):
+    """`parslip info --json` carries S, L_c and Lambda where a prestress is held, as the law's own formulas
+    give them from the scene (``analysis.rupture.law_scales``: S = (tau_p - tau_0)/(tau_0 - tau_r),
+    L_c = 2 M Gamma/(pi (tau_0 - tau_r)^2), whose units the function keeps), and null S and L_c without one."""
+    import json
+
+    from parslip.analysis.rupture import law_scales
+    sc = tmp_path / "held.toml"
+    sc.write_text(small_toml(**NUCLEATED))
+    assert main(["info", str(sc), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    k = law_scales(derive(scene(**{**SMALL, **NUCLEATED})))
+    assert got["S"] == pytest.approx((k["tau_p"] - 0.03) / (0.03 - k["tau_r"]), rel=1e-12)
+    assert got["L_c"] == k["L_c"] and got["L_c"] > 0
+    assert got["Lambda"] == k["Lambda"] and 0 < got["S"] < 1.77
+    plain = tmp_path / "plain.toml"
+    plain.write_text(small_toml())
+    assert main(["info", str(plain), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["S"] is None and got["L_c"] is None and got["Lambda"] > 0

@@ -10,6 +10,8 @@ scene differs from it.  Each line starts with a 17-column label.
 """
 from __future__ import annotations
 
+import math
+
 from ..errors import ConfigError
 from ..scene import advice, budget, presets
 from ..scene.load import load
@@ -244,9 +246,14 @@ def cmd_info(args) -> int:
     if args.json:
         import json
         from ..io.output import hdf5_mode
+        from ..analysis.rupture import law_scales
         fig = scaling_figures(st, ranks, hdf5_mode(ranks))
+        # The law's scales (tau_p, tau_r, Gamma in rho c_r^2 and m c_r^2/a, D_c, Lambda in a) and, where a
+        # prestress is held, tau_0, Andrews' S and L_c (a); NaN as null.
+        law = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in law_scales(st).items()
+               if k in ("tau_p", "tau_r", "D_c", "Gamma", "Lambda", "tau_0", "S", "L_c")}
         print(json.dumps({"scene": args.scene, "nodes": st.lattice.n_nodes, "dt": st.dt, "steps": st.n_steps,
-                          **fig}))
+                          **fig, **law}))
         return 0
     print("\n".join(report(st, args.scene, ranks, args.set)))
     return 0
