@@ -195,16 +195,35 @@ def test_collective_mpio_and_gathered_files_are_identical(small_runs, n):
         assert np.array_equal(mpio_attrs[k], gather_attrs[k]), k
 
 
+def test_overlap_cuts_only_the_rows_peers_keep():
+    """Without run.overlap (the default) a rank with peers runs whole rows, all before the exchange; with it,
+    each row is cut where its HALO-facing columns end and only those columns run before the exchange.  Either
+    way every OWNED node of an integrated row is in exactly one task."""
+    st = derive(scene(**{**SMALL, **QUICK}))
+    lat = st.lattice
+    for rank in (0, 1):
+        plain = build_layout(lat, rank, 3, st.reach, st.drive.mode)
+        cut = build_layout(lat, rank, 3, st.reach, st.drive.mode, overlap=True)
+        assert plain.tasks["early"].all()
+        assert 0 < cut.tasks["early"].sum() < len(cut.tasks) and len(cut.tasks) > len(plain.tasks)
+        assert cut.tasks["n"][cut.tasks["early"] == 1].sum() < plain.tasks["n"].sum() / 2
+        assert cut.tasks["n"].sum() == plain.tasks["n"].sum() == sum(
+            int(max(hi - lo, 0)) for b in plain.blocks for r, (lo, hi) in enumerate(b.owned) if b.integrated[r])
+    serial = build_layout(lat, 0, 1, st.reach, st.drive.mode, overlap=True)
+    assert not serial.tasks["early"].any()
+
+
 def test_slabs_narrower_than_the_slip_are_bitwise_identical(small_runs, tmp_path):
     """Eight ranks on 40 columns: under the contact slabs of 3 or 4 columns, narrower than the interface halos
-    (9 to 11 columns), so halos reach across several slabs (multi-hop)."""
+    (9 to 11 columns), so halos reach across several slabs (multi-hop).  With run.overlap, so that the cut rows
+    and the exchange that overlaps the rest give the bits of one rank too (1, 2 and 3 ranks run without)."""
     require("gather")
     st = derive(scene(**{**SMALL, **QUICK}))
     lay = build_layout(st.lattice, 0, 8, st.reach)
     assert max(np.diff(lay.bounds)[1:-1]) < min(st.reach.bottom) and len(lay.peers) >= 3
     ref = small_runs.get("gather", 1)[0]
     out = tmp_path / "r8.vtkhdf"
-    p = run_cli(8, "run", small_runs.scene, "--out", out, "--no-png", "--quiet")
+    p = run_cli(8, "run", small_runs.scene, "--out", out, "--no-png", "--quiet", "--set", "run.overlap=true")
     assert p.returncode == 0, p.stderr
     assert_same_datasets(datasets(out)[0], ref, "gather on 8 ranks")
 

@@ -92,7 +92,8 @@ def rebuild(sim, writer):
     st = sim.setup
     ext, growth = _agreed_drift(sim)
     drift = follow_box(old.reach.drift, ext, growth, st.skin, L.DRIFT_QUANTA)
-    move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
+    move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode,
+                                 overlap=st.overlap))
     _count_from(sim, sim.diag.gflags[L.L_DRIFT:L.L_DRIFT + 4], drift.shift - old.reach.drift.shift)
     sim.rebuilds += 1
     if writer is not None:
@@ -176,7 +177,8 @@ def resume(sim, attrs: dict):
         drift = follow_box(old.reach.drift, [0.0 if e == L.NO_SITES else e / L.DRIFT_QUANTA for e in ext], [0.0] * 4,
                            st.skin, L.DRIFT_QUANTA)
     if drift != old.reach.drift:         # the box was rebuilt before the checkpoint: its slabs and halos
-        move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode))
+        move_to(sim, build_layout(st.lattice, sim.rank, sim.size, drift_reach(old.reach.link, drift), st.drive.mode,
+                                 overlap=st.overlap))
     if "halo_drift" in attrs:
         sim.diag.halo[:] = np.asarray(attrs["halo_record"], np.int64)
         sim.rebuilds = int(attrs["halo_rebuilds"])

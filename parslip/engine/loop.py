@@ -313,8 +313,8 @@ def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, sh
     if pb[NODES] > pb[ROWS]:
         _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
               iface.exb_y, iface.zeros, drive, undriven, shift, gy, bud, energy)
-    if phase == LATE:
-        progress(plan)
+    if phase == LATE and (pb[END] > pb[ROWS] or pt[END] > pt[ROWS]):
+        progress(plan)             # an MPI call (half a microsecond): only where there is work to hide it behind
     if pb[END] > pb[NODES]:
         _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
                iface.exb_y, drive, undriven, shift, gy, bud, energy)

@@ -69,7 +69,7 @@ class Simulation:
                            timers=np.zeros(L.T_SIZE, np.int64), beat=np.zeros(L.BEAT_SIZE, np.int64),
                            halo=np.zeros(L.H_SIZE, np.int64))
         self.frames = None
-        self._build(build_layout(lat, rank, size, st.reach, st.drive.mode))
+        self._build(build_layout(lat, rank, size, st.reach, st.drive.mode, overlap=st.overlap))
         # The slabs of no drift: each rank's nodes are one contiguous range of global ids, in which the output
         # file's node datasets are written (the first layout's, as nothing has slid yet).
         self.io_placement = Placement(self.layout.bounds, (0, 0))

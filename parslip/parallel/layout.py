@@ -378,7 +378,7 @@ def _mask(blk: BlockLayout, r: int, c: int) -> int:
     return m
 
 
-def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
+def _tasks(lattice: Lattice, blocks, peers, mode: str, overlap: bool = False) -> np.ndarray:
     """The row schedule: every OWNED node of an integrated row in exactly one task.
 
     Interior columns of a row run in one vectorised loop of its kind (FULL,
@@ -387,7 +387,9 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
     Both kernels form the same differences and sums in the same order, so a
     node gets the same bits whichever runs it, and the cut does not matter.  A task is ``early`` when a peer
     keeps some of its nodes as HALO: the loop runs early tasks first, sends,
-    and runs the rest while the messages travel.
+    and runs the rest while the messages travel.  Without ``overlap`` a rank with peers runs every task
+    early (whole rows, then the exchange): cutting a row costs a task and its short end, about 0.1 us a
+    row (docs/hpc/scaling.md), more than a message on one node takes.
     """
     rows = []
     for b in (BOTTOM, TOP):
@@ -408,6 +410,8 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str) -> np.ndarray:
                             e_lo = max(e_lo, sg.hi)
                         if sg.hi == hi:
                             e_hi = min(e_hi, sg.lo)
+            if peers and not overlap:
+                e_lo, e_hi = hi, lo          # every column early, the row uncut
             extra = EXTRA_NONE
             if lattice.has_interface and b == TOP and r == 0:
                 extra = EXTRA_TOP
@@ -465,13 +469,14 @@ def task_ranges(tasks: np.ndarray) -> np.ndarray:
 
 
 def build_layout(lattice: Lattice, rank: int, size: int, reach: Reach | None, mode: str = "none",
-                 cost: np.ndarray | None = None, bounds: np.ndarray | None = None) -> Layout:
+                 cost: np.ndarray | None = None, bounds: np.ndarray | None = None, overlap: bool = False) -> Layout:
     """The decomposition seen from ``rank`` of ``size``.  Raises ConfigError if it cannot be cut.
 
     The sliding block's columns stand at x-columns c + D (D = ``reach.drift.shift``, 0 without a drift box);
     the slabs balance the cost of that placement (``column_cost``) unless ``bounds`` are given.  Only the
     ranks whose slabs lie within the widest halo of this rank's are looked at: the set-up of one rank does
-    not grow with the rank count."""
+    not grow with the rank count.  With ``overlap`` (``run.overlap``) rows are cut so that the columns peers
+    keep are updated and sent first (``_tasks``)."""
     shift = reach.drift.shift if reach is not None and reach.drift is not None else 0
     offsets = (0, shift)
     if bounds is None:
@@ -492,7 +497,7 @@ def build_layout(lattice: Lattice, rank: int, size: int, reach: Reach | None, mo
         peer = _peer(lattice, p, mine, blocks_of(p))
         if peer.send or peer.recv:
             peers.append(peer)
-    tasks = _tasks(lattice, mine, peers, mode)
+    tasks = _tasks(lattice, mine, peers, mode, overlap)
     return Layout(rank=rank, size=size, bounds=bounds, reach=reach, blocks=mine, peers=peers, tasks=tasks,
                   offsets=offsets)
 

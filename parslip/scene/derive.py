@@ -49,6 +49,11 @@ class Setup:
     damping: Damping         # zeta and its form (``model.damping``)
 
     @property
+    def overlap(self) -> bool:
+        """Whether several ranks overlap the halo exchange with the interior update (``run.overlap``)."""
+        return bool(self.scene.get("run.overlap", False))
+
+    @property
     def n_steps(self) -> int:
         return self.n_ramp + self.n_settle + self.n_drive
 

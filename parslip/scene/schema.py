@@ -212,6 +212,12 @@ SCHEMA: dict[str, Key] = {
     "checkpoint.wall": Key(0.0, float, "s", ">= 0 (0 = none on a wall-clock cadence)", _range(0.0),
                            "wall-clock time between checkpoints"),
     # the run's supervision ---------------------------------------------------------
+    "run.overlap": Key(False, bool, "-", "true or false",
+                       lambda v: isinstance(v, bool),
+                       "on several ranks: update the columns a peer keeps first, send them, and update the rest while "
+                       "the messages travel (each row cut in two); false: update each row whole, then exchange.  "
+                       "Overlap pays only where a message takes longer than cutting every row costs (about 0.1 us "
+                       "per row of the slab here: docs/hpc/scaling.md); the results are the same bits either way"),
     "run.watchdog": Key(180.0, float, "s", ">= 0 (0 = off)", _range(0.0),
                         "on several ranks: end the job (exit 3, output marked failed) when the ranks have not "
                         "agreed for this long; --watchdog overrides it"),

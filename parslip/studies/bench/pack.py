@@ -28,7 +28,7 @@ def measure(setup, ranks: int, rank: int, seconds: float = 1.0) -> dict:
     """ns per value of packing and of unpacking rank ``rank``'s messages (median of repeats)."""
     from ...parallel.halo_mpi import build_plan, pack_all
     from ...parallel.layout import build_layout
-    lay = build_layout(setup.lattice, rank, ranks, setup.reach, setup.drive.mode)
+    lay = build_layout(setup.lattice, rank, ranks, setup.reach, setup.drive.mode, overlap=setup.overlap)
     plan = build_plan(lay, np.float64)
     bl, tl = lay.blocks
     rng = np.random.default_rng(0)
@@ -70,7 +70,7 @@ def exchange(setup, comm, seconds: float = 1.0) -> dict:
     from ...parallel.exchange import build_plan as plan_of, release
     from ...parallel.layout import build_layout
     rank, size = comm.Get_rank(), comm.Get_size()
-    lay = build_layout(setup.lattice, rank, size, setup.reach, setup.drive.mode)
+    lay = build_layout(setup.lattice, rank, size, setup.reach, setup.drive.mode, overlap=setup.overlap)
     plan = plan_of(lay, np.float64, comm)
     bl, tl = lay.blocks
     bx, by, tx, ty = (np.zeros(b.shape) for b in (bl, bl, tl, tl))

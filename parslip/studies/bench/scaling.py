@@ -139,7 +139,8 @@ def rank_shares(setup, ranks: int) -> list[RankShare]:
     """Every rank's share of a run of ``setup`` on ``ranks`` ranks (no MPI: the layouts are pure)."""
     from ...parallel.layout import build_layout
     lat = setup.lattice
-    return [rank_share(lat, build_layout(lat, r, ranks, setup.reach, setup.scene["drive.mode"]))
+    return [rank_share(lat, build_layout(lat, r, ranks, setup.reach, setup.scene["drive.mode"],
+                                           overlap=setup.overlap))
             for r in range(ranks)]
 
 
