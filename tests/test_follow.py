@@ -15,7 +15,7 @@ import pytest
 from helpers import SMALL, datasets, require, run_cli, scene, small_toml
 from parslip.engine.kernels.interface import Geometry, coverage
 from parslip.model.lattice import BOTTOM, TOP, Lattice
-from parslip.parallel.layout import (PAD, Drift, build_layout, drift_reach, follow_box, link_of, start_box)
+from parslip.parallel.layout import (MASKED, PAD, Drift, build_layout, drift_reach, follow_box, link_of, start_box)
 from parslip.parallel.migrate import NODES, SITES, Placement, block_columns, redistribute
 from parslip.scene.derive import derive
 
@@ -241,8 +241,9 @@ def test_a_one_rank_checkpoint_of_a_slid_block_continues_on_three(long_slip):
 @pytest.mark.parametrize("case", range(12))
 def test_counts_in_closed_form_are_the_layouts_counts(case):
     """``parallel.counts.rank_counts`` (every rank at once, no layout built) gives each rank's nodes, sites,
-    halo values sent and received, peers, farthest hop and array cells exactly as its own layout does, for
-    shifted blocks, multi-hop halos (slabs narrower than the halos), a rigid substrate and a free block."""
+    halo values sent and received, peers, farthest hop, array cells, and the loop's row segments and single-node
+    tasks exactly as its own layout does, for shifted blocks, multi-hop halos (slabs narrower than the halos), a
+    rigid substrate and a free block."""
     from parslip.parallel.counts import rank_counts
     from parslip.studies.bench.scaling import rank_share
     rng = np.random.default_rng(case)
@@ -259,6 +260,8 @@ def test_counts_in_closed_form_are_the_layouts_counts(case):
         assert (c.nodes[r], c.sites[r]) == (share.nodes, share.sites), r
         assert (c.sent[r], c.received[r]) == (share.values_sent, share.values_received), r
         assert c.peers[r] == len(share.peers) and c.hops[r] == share.hops, r
+        single = lay.tasks["kind"] == MASKED
+        assert (c.segments[r], c.singles[r]) == (int((~single).sum()), int(single.sum())), r
         for i, b in enumerate(lay.blocks):
             if b.rows:
                 assert c.cells[i][r] == int(np.prod(b.shape)), (r, i)

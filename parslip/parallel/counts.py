@@ -11,6 +11,12 @@ A block b on rank p (``layout.slab_columns``): its slab's columns [c0, c1) (uncl
 for bulk rows and the interface halos (``layout.Reach``) on the interface rows.  A rank receives every
 stored column it does not own, and sends each owned column once to every other rank that stores it; each
 carries 2 values (x, y) per node, and the block's interface row the bond table's travelling rows per site.
+
+The loop's tasks (``layout._tasks``): each integrated row of a rank's owned columns [lo, hi) is cut at the
+block's first and last column (updated with their missing bonds); a piece of at most ``layout.SHORT`` columns
+runs node by node (``singles``), a longer one as one vectorised segment (``segments``).  With overlap each
+row is also cut where the columns a peer keeps end: counted as one single node per row and side with a peer
+(the bulk rows' halo of one column; the interface rows' wider halos are left out).
 """
 from __future__ import annotations
 
@@ -20,7 +26,7 @@ import numpy as np
 
 from ..model.interface import BONDS
 from ..model.lattice import BOTTOM, TOP
-from .layout import BULK_REACH, PAD
+from .layout import BULK_REACH, PAD, SHORT
 
 
 @dataclass
@@ -35,6 +41,8 @@ class Counts:
     cells: tuple                # per block: array cells of its state arrays ((rows + 2 PAD) x width)
     halo_top: np.ndarray        # [ranks, 2] HALO columns (left, right) of the block's interface row
     halo_bottom: np.ndarray     # [ranks, 2] of the substrate's interface row
+    segments: np.ndarray        # row segments the loop runs as one vectorised task per step
+    singles: np.ndarray         # nodes it runs one by one (block edges, short pieces)
 
     @property
     def values(self) -> np.ndarray:
@@ -95,15 +103,34 @@ def _union(intervals, P: int):
     return peers, hops
 
 
-def rank_counts(lattice, bounds, reach, offsets=(0, 0)) -> Counts:
+def _tasks(blk, b: int, lo, hi, overlap: bool):
+    """Per rank: (segments, single nodes) of block b's integrated rows over owned columns [lo, hi)."""
+    rows = blk.rows - (1 if b == BOTTOM else 0)         # the substrate's fixed row is never updated
+    a = np.maximum(lo, np.minimum(hi, blk.col0 + 1))
+    z = np.maximum(lo, np.minimum(hi, blk.col0 + blk.cols - 1))
+    segs = np.zeros(len(lo), np.int64)
+    singles = np.zeros(len(lo), np.int64)
+    for w in (a - lo, z - a, hi - z):
+        segs += w > SHORT
+        singles += np.where(w <= SHORT, w, 0)
+    if overlap and len(lo) > 1:
+        sides = (np.arange(len(lo)) > 0).astype(np.int64) + (np.arange(len(lo)) < len(lo) - 1)
+        singles += np.where(hi > lo, sides, 0)
+    return rows * segs, rows * singles
+
+
+def rank_counts(lattice, bounds, reach, offsets=(0, 0), overlap: bool = False) -> Counts:
     """The counts of every rank of the decomposition ``bounds`` (x-column slab bounds), ``offsets`` (the
-    x-column offset of each block's columns) and ``reach`` (the interface halos)."""
+    x-column offset of each block's columns), ``reach`` (the interface halos) and ``overlap``
+    (``run.overlap``: rows cut for the exchange)."""
     P = len(bounds) - 1
     serial = P == 1
     nodes = np.zeros(P, np.int64)
     sites = np.zeros(P, np.int64)
     sent = np.zeros(P, np.int64)
     recv = np.zeros(P, np.int64)
+    segments = np.zeros(P, np.int64)
+    singles = np.zeros(P, np.int64)
     cells = []
     halos = {TOP: np.zeros((P, 2), np.int64), BOTTOM: np.zeros((P, 2), np.int64)}
     intervals = []              # (first, last) rank arrays: each rank's peers are their union, less itself
@@ -114,6 +141,9 @@ def rank_counts(lattice, bounds, reach, offsets=(0, 0)) -> Counts:
             continue
         c0, c1, lo, hi = _slabs(lattice, bounds, b, offsets[b])
         owned = hi - lo
+        seg, one = _tasks(blk, b, lo, hi, overlap and not serial)
+        segments += seg
+        singles += one
         numbered = lattice.numbered[b]
         if numbered:
             nodes += owned * blk.rows
@@ -151,4 +181,4 @@ def rank_counts(lattice, bounds, reach, offsets=(0, 0)) -> Counts:
         cells.append((blk.rows + 2 * PAD) * width)
     peers, hops = _union(intervals, P)
     return Counts(nodes=nodes, sites=sites, sent=sent, received=recv, peers=peers, hops=hops, cells=tuple(cells),
-                  halo_top=halos[TOP], halo_bottom=halos[BOTTOM])
+                  halo_top=halos[TOP], halo_bottom=halos[BOTTOM], segments=segments, singles=singles)

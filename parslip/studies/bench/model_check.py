@@ -4,9 +4,11 @@
 (``scaling.measure``).  From those points and two micro-benchmarks this module takes the coefficients the
 travel model charges (``scaling.Coefficients``):
 
-    node_ns            the 1-rank step time over the nodes, the median over the contact lengths measured
-                       (in cache at l = 300-500, out of it at l = 1000, dominated by each row's fixed
-                       cost at l = 100; the site share, S / N < 1 %, is left in)
+    segment_ns         ``bench.rows``: what a row segment costs beyond its nodes
+    single_ns          ``bench.rows``: a node updated on its own (block edges)
+    node_ns            the 1-rank step time less the fixed, site, segment and single-node shares, over the
+                       nodes: the median over the contact lengths measured (in cache at l = 300-500, out of
+                       it at l = 1000)
     pack_ns_per_value  ``bench.pack.measure``: packing and unpacking one halo value, no MPI
     latency_us         ``bench.pack.exchange`` on 2 ranks: the exchange of a step less its packing, per
                        pair of messages (a message sent and one received)
@@ -39,7 +41,15 @@ def _counts(setup, ranks: int):
     from ...parallel.counts import rank_counts
     from ...parallel.layout import slab_bounds
     lat = setup.lattice
-    return rank_counts(lat, slab_bounds(lat, ranks), setup.reach, (0, 0))
+    return rank_counts(lat, slab_bounds(lat, ranks), setup.reach, (0, 0), setup.overlap)
+
+
+def _node_ns(q, rows: dict, base: Coefficients, mode: str) -> float:
+    """A 1-rank point's ns per node update once the step's other shares (fixed, sites, rows) are taken out."""
+    c = _counts(_case_setup(q["l"], mode), 1)
+    rest = (base.fixed_us * 1e3 + base.site_ns * float(c.sites[0]) + rows["segment_ns"] * float(c.segments[0])
+            + rows["single_ns"] * float(c.singles[0]))
+    return (q["us_per_step"] * 1e3 - rest) / float(c.nodes[0])
 
 
 def exchange_latency(l: int, mode: str = "shear", seconds: float = 1.0, timeout: float = 300.0) -> dict | None:
@@ -61,22 +71,25 @@ def measured(pts, mode: str = "shear", log=print) -> Coefficients:
     """The coefficients of this host (module docstring) from the 1-rank points ``pts`` and the
     micro-benchmarks; what could not be measured keeps its value from ``scaling.coefficients``."""
     from .pack import measure as pack_measure
+    from .rows import measure as rows_measure
     base = coefficients()
     one = [q for q in pts if q["ranks"] == 1 and q["us_per_step"]]
     if not one:
         return base
     big = max(one, key=lambda q: q["l"])
     st = _case_setup(big["l"], mode)
-    node_ns = float(np.median([q["us_per_step"] * 1e3 / _case_setup(q["l"], mode).lattice.n_nodes for q in one]))
+    rows = rows_measure()
+    node_ns = float(np.median([_node_ns(q, rows, base, mode) for q in one]))
     pack = pack_measure(st, 2, 0, 0.5)["ns_per_value"]
     ex = exchange_latency(big["l"], mode)
     latency = base.latency_us if ex is None else max(2.0 * ex["us_per_message"], 0.0)
     src = f"parslip bench --scaling, {time.strftime('%Y-%m-%d')}, l = {', '.join(str(q['l']) for q in one)}"
-    log(f"coefficients: node {node_ns:.3f} ns, packing {pack:.2f} ns per value, latency {latency:.2f} us "
+    log(f"coefficients: node {node_ns:.3f} ns, row segment {rows['segment_ns']:.1f} ns, single node "
+        f"{rows['single_ns']:.1f} ns, packing {pack:.2f} ns per value, latency {latency:.2f} us "
         f"({'measured' if ex else 'assumed'})")
-    return Coefficients(node_ns=node_ns, site_ns=base.site_ns * node_ns / base.node_ns, fixed_us=base.fixed_us,
-                        pack_ns_per_value=pack, latency_us=latency, bandwidth_gbs=base.bandwidth_gbs,
-                        overlap=base.overlap, source=src)
+    return Coefficients(node_ns=node_ns, site_ns=base.site_ns, segment_ns=rows["segment_ns"],
+                        single_ns=rows["single_ns"], fixed_us=base.fixed_us, pack_ns_per_value=pack,
+                        latency_us=latency, bandwidth_gbs=base.bandwidth_gbs, source=src)
 
 
 def check(pts, coef: Coefficients, mode: str = "shear", cores: int | None = None) -> list[dict]:

@@ -213,7 +213,7 @@ class Cluster:
     throughput_ratio: float = 1.0
     latency_us: float = 2.0
     bandwidth_gbs: float = 10.0
-    overlap: bool = True
+    overlap: bool = False
 
 
 def predict(f: Fit, shares: list[RankShare], cluster: Cluster, value_bytes: int = 8) -> dict:
@@ -248,27 +248,33 @@ class Coefficients:
 
     node_ns            ns per node update of one core (1 / the per-core throughput `parslip bench` measures)
     site_ns            ns per interface site the bond update runs over, beyond its node update
+    segment_ns         ns a row segment costs beyond its nodes (the task, its views, the loop's ends)
+    single_ns          ns per node the loop updates on its own (block edges, short pieces)
     fixed_us           us per step that does not scale (loop overhead, flag checks, the exchange's calls)
     pack_ns_per_value  ns to pack or unpack one halo value (``studies.bench.pack``, measured directly)
     latency_us         us per message (MPI's small-message latency on the network)
     bandwidth_gbs      GB/s per rank on the network
-    overlap            the messages travel while the interior computes (``engine.loop``'s LATE tasks)
+    overlap            the messages travel while the interior computes (``run.overlap``: the scene's, set by
+                       ``travel_model``; the code before overlapped)
     source             where the coefficients come from
     """
     node_ns: float = 1.68
     site_ns: float = 20.0
+    segment_ns: float = 50.0
+    single_ns: float = 20.0
     fixed_us: float = 1.0
     pack_ns_per_value: float = 2.5
     latency_us: float = 2.0
     bandwidth_gbs: float = 10.0
-    overlap: bool = True
+    overlap: bool = False
     source: str = "defaults"
 
 
 def coefficients(precision: str = "float64") -> Coefficients:
     """The coefficients `parslip bench` measured on this host (``io.cache``'s coefficients file), else the
     defaults: the per-core throughput of ``scene.budget.THROUGHPUT``, a site at ``layout.SITE_COST`` node
-    updates, and the packing and fixed costs measured on the project's 2-core x86-64 host."""
+    updates, and the packing, row and fixed costs measured on the project's 2-core x86-64 host.  Whether the
+    exchange overlaps is the scene's (``run.overlap``), never the host's: a stored value is ignored."""
     from ...io.cache import load_coefficients
     from ...parallel.layout import SITE_COST
     from ...scene.budget import THROUGHPUT
@@ -277,7 +283,7 @@ def coefficients(precision: str = "float64") -> Coefficients:
     stored = load_coefficients()
     if not stored:
         return base
-    known = {k: v for k, v in stored.items() if k in Coefficients.__dataclass_fields__}
+    known = {k: v for k, v in stored.items() if k in Coefficients.__dataclass_fields__ and k != "overlap"}
     return Coefficients(**{**base.__dict__, **known})
 
 
@@ -294,6 +300,7 @@ def step_model(counts, coef: Coefficients) -> dict:
     """Each rank's predicted time per step (us) from its counts (``parallel.counts.Counts``):
 
         compute  = node_ns N + site_ns (S + F)           F: the HALO sites its bond update also runs over
+                   + segment_ns R + single_ns O          R row segments, O nodes updated on their own
         pack     = pack_ns_per_value H                   H: halo values sent plus received
         network  = (M / 2) latency + 8 H / bandwidth      M: messages sent plus received
         exposed  = max(0, network - interior) with overlap, else network, where the interior is the
@@ -302,7 +309,8 @@ def step_model(counts, coef: Coefficients) -> dict:
 
     The busiest rank sets the step, as every rank waits for its peers' halos."""
     foreign = counts.halo_top.sum(axis=1)
-    compute = (coef.node_ns * counts.nodes + coef.site_ns * (counts.sites + foreign)) / 1e3
+    compute = (coef.node_ns * counts.nodes + coef.site_ns * (counts.sites + foreign) + coef.segment_ns * counts.segments
+               + coef.single_ns * counts.singles) / 1e3
     values = counts.values
     pack = coef.pack_ns_per_value * values / 1e3
     network = counts.messages / 2 * coef.latency_us + 8 * values / (coef.bandwidth_gbs * 1e3)
@@ -316,11 +324,14 @@ def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, sam
     """The busiest rank's figures per step, each the maximum over the scene's whole travel (``travel_shifts``:
     the slabs cut for the block at each shift, its halos those of a drift box with the scene's skin), and
     rank 0's memory over the median rank's; every count in closed form (``parallel.counts``), so it takes
-    seconds at thousands of ranks.  Keys as `parslip info --json` prints them."""
+    seconds at thousands of ranks.  Keys as `parslip info --json` prints them.  Whether the exchange overlaps
+    is the scene's (``run.overlap``)."""
+    from dataclasses import replace
     from ...parallel.counts import rank_counts
     from ...parallel.layout import Drift, drift_reach, slab_bounds
     from ...scene.memory import per_rank_bytes
     lat = setup.lattice
+    coef = replace(coef, overlap=setup.overlap)
     out = {"ranks": ranks, "shifts": travel_shifts(setup, samples), "peers_max": 0, "messages_per_step": 0,
            "halo_values_per_step": 0, "foreign_sites_max": 0, "step_us_predicted": 0.0, "step_us_compute": 0.0,
            "efficiency_predicted": 1.0, "rank0_memory_ratio": 0.0, "memory_mib_rank0": 0.0,
@@ -331,7 +342,7 @@ def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, sam
             d = reach.drift
             reach = drift_reach(reach.link, Drift(shift, d.top, d.bottom, d.skin))
         bounds = slab_bounds(lat, ranks, shift)
-        c = rank_counts(lat, bounds, reach, (0, shift))
+        c = rank_counts(lat, bounds, reach, (0, shift), coef.overlap)
         m = step_model(c, coef)
         mem = per_rank_bytes(setup, ranks, gather, counts=c, bounds=bounds)
         med = float(np.median(mem))
@@ -348,7 +359,8 @@ def travel_model(setup, ranks: int, coef: Coefficients, gather: bool = True, sam
         out["efficiency_predicted"] = min(out["efficiency_predicted"], compute / step)
     out.update({"pack_ns_per_value": coef.pack_ns_per_value, "latency_us": coef.latency_us,
                 "bandwidth_gbs": coef.bandwidth_gbs, "overlap": coef.overlap, "node_ns": coef.node_ns,
-                "site_ns": coef.site_ns, "fixed_us": coef.fixed_us, "coefficients": coef.source})
+                "site_ns": coef.site_ns, "segment_ns": coef.segment_ns, "single_ns": coef.single_ns,
+                "fixed_us": coef.fixed_us, "coefficients": coef.source})
     return out
 
 
@@ -365,7 +377,8 @@ def _before(setup):
     from ...parallel.layout import interface_reach
     travel = setup.drive.travel(setup.material.c_r, setup.t_unit) + 2.0
     big = setup.law.largest(setup.lattice.n_top_sites if setup.lattice.has_interface else 0)
-    return replace(setup, reach=interface_reach(setup.law.rebond_length, big["delta_b"], travel))
+    return replace(setup, reach=interface_reach(setup.law.rebond_length, big["delta_b"], travel),
+                   scene={**setup.scene, "run.overlap": True})
 
 
 def scaling_rows(setup, ranks_list, coef: Coefficients, gather: bool = False) -> list[dict]:
