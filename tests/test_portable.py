@@ -6,20 +6,18 @@ bits.  The libraries' CPU-dependent paths are then switched off in a subprocess 
 above its baseline with NPY_DISABLE_CPU_FEATURES, OpenBLAS's kernels set to an older CPU with
 OPENBLAS_CORETYPE): the set-up must not move (before omega_max was rounded, push's Lanczos value moved
 from 24.45511710235529 to 24.455117102355374 under OPENBLAS_CORETYPE=Prescott).  Last, the compiled
-loop built for an AVX2+FMA CPU (NUMBA_CPU_NAME=haswell) must give the default build's bits.
+loop built for an AVX2+FMA CPU (NUMBA_CPU_NAME=haswell) must give the default build's bits: that check rides
+on the cold compile of ``tests/test_compile_once.py`` (a 3-rank job built for haswell against a 1-rank run of
+the default build), which saves the suite a second compile of the loop.
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import subprocess
 import sys
-from pathlib import Path
 
-import pytest
-
-from helpers import REPO, datasets, run_cli, small_toml
+from helpers import REPO
 
 SCENES = ("run/push.toml", "run/pull.toml", "run/shear.toml", "run/push_l1000.toml")
 SPEEDS = {"c_r": "0x1.fffffffffffffp-1", "c_s": "0x1.1902da834b407p+0", "c_l": "0x1.cae3a7ebffd2ep+0",
@@ -103,26 +101,3 @@ def test_the_set_up_keeps_its_bits_without_the_libraries_vector_kernels(tmp_path
     got = _setup_numbers(tmp_path, **_without_vector_paths())
     assert got.pop("random_field") == RANDOM_FIELD
     assert got == STORED
-
-
-@pytest.mark.slow
-def test_the_loop_built_for_avx2_with_fma_gives_the_default_builds_bits(tmp_path):
-    """SMALL run with NUMBA_CPU_NAME=haswell (AVX2 + FMA) against the default build (this host's CPU: on an
-    AVX-512 host, another instruction set): /interface and /energy bit for bit.  Costs one compile of the
-    loop for haswell (about 2 minutes of a core) the first time; it is kept in the session's kernel cache
-    (NUMBA_CACHE_DIR, tests/conftest.py), where numba keys entries by the CPU name."""
-    sc = tmp_path / "s.toml"
-    sc.write_text(small_toml())
-    outs = {}
-    for cpu in ("", "haswell"):
-        outs[cpu] = tmp_path / f"run{cpu or '_default'}.vtkhdf"
-        env = {"NUMBA_CPU_NAME": cpu} if cpu else {}
-        p = run_cli(1, "run", sc, "--out", outs[cpu], "--no-png", "--quiet", env=env, timeout=900)
-        assert p.returncode == 0, p.stderr
-    want, _ = datasets(outs[""])
-    got, _ = datasets(outs["haswell"])
-    names = [n for n in want if n.startswith(("interface/", "energy/"))]
-    assert "interface/drive_force" in names and any(n.startswith("energy/") for n in names)
-    assert len(want["interface/time"]) > 100
-    for name in names:
-        assert got[name].tobytes() == want[name].tobytes(), name

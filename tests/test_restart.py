@@ -93,14 +93,17 @@ def test_killed_mid_checkpoint_then_restarted_is_bitwise_the_uninterrupted_run(t
     assert_one_generation(ckpt)
 
 
-@pytest.mark.parametrize("writers", [("gather", "mpio"), ("mpio", "gather")])
-def test_written_on_7_ranks_restarted_on_3_is_the_uninterrupted_run(tmp_path, uninterrupted, writers):
-    """Half the run on 7 ranks (slabs 5 to 6 columns wide) ends with a checkpoint; 3 ranks continue it,
-    each reading only its slab, with the other writer's h5py (part files read by the MPI build, a
-    collectively written file by PyPI's): every /interface and /energy dataset and the final state by
-    global id equal the uninterrupted 1-rank run's, bit for bit."""
+# Part files from 7 ranks; the collective file from 4: 7 ranks spinning in collective HDF5 writes on 2
+# cores took 68 s of the suite, and what the test reads does not depend on how many wrote it.
+@pytest.mark.parametrize("writers", [("gather", "mpio", 7), ("mpio", "gather", 4)])
+def test_written_on_more_ranks_restarted_on_3_is_the_uninterrupted_run(tmp_path, uninterrupted, writers):
+    """Half the run on 7 ranks (slabs 5 to 6 columns wide; 4 with the collective writer) ends with a
+    checkpoint; 3 ranks continue it, each reading only its slab, with the other writer's h5py (part files
+    read by the MPI build, a collectively written file by PyPI's): every /interface and /energy dataset and
+    the final state by global id equal the uninterrupted 1-rank run's, bit for bit."""
     require(writers[0])
     require(writers[1])
+    n_first = writers[2]
     sc, (ref, _), ref_ckpt = uninterrupted
     out = tmp_path / "o.vtkhdf"
     ckpt = str(out) + ".ckpt.h5"
@@ -108,12 +111,13 @@ def test_written_on_7_ranks_restarted_on_3_is_the_uninterrupted_run(tmp_path, un
     # flush after the first snapshot it adds (the output writer's, seen at cc50ac0 too); the interface
     # record does not depend on them.
     quiet = ("--no-png", "--quiet", "--set", "output.snapshots=0")
-    p = run_cli(7, "run", sc, "--out", out, *quiet, "--set", "drive.duration=3.0", writer=writers[0], timeout=600)
+    p = run_cli(n_first, "run", sc, "--out", out, *quiet, "--set", "drive.duration=3.0", writer=writers[0],
+                timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     with h5py.File(ckpt, "r") as f:
-        assert f.attrs["n_ranks"] == 7 and f.attrs["layout"] == ("parts" if writers[0] == "gather" else "single")
+        assert f.attrs["n_ranks"] == n_first and f.attrs["layout"] == ("parts" if writers[0] == "gather" else "single")
         if writers[0] == "gather":
-            assert len(f["parts"]) == 7
+            assert len(f["parts"]) == n_first
     p = run_cli(3, "run", sc, "--out", out, *quiet, "--restart", ckpt, writer=writers[1], timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     got, attrs = datasets(out)
