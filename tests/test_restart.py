@@ -107,10 +107,9 @@ def test_written_on_more_ranks_restarted_on_3_is_the_uninterrupted_run(tmp_path,
     sc, (ref, _), ref_ckpt = uninterrupted
     out = tmp_path / "o.vtkhdf"
     ckpt = str(out) + ".ckpt.h5"
-    # No snapshots: an output file the gathering writer made, continued by the mpio writer, hangs in its
-    # flush after the first snapshot it adds (the output writer's, seen at cc50ac0 too); the interface
-    # record does not depend on them.
-    quiet = ("--no-png", "--quiet", "--set", "output.snapshots=0")
+    # With snapshots: each writer adds them to the file the other made (an output file the gathering writer
+    # made, continued by the mpio writer, once hung in the flush after the first snapshot it added).
+    quiet = ("--no-png", "--quiet")
     p = run_cli(n_first, "run", sc, "--out", out, *quiet, "--set", "drive.duration=3.0", writer=writers[0],
                 timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
