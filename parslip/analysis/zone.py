@@ -116,6 +116,12 @@ def front_zone(run, front) -> dict:
             "v": np.abs(tip_speed_at(front, tb)), "X_c": zone_width(x, tp, tb, front.direction, l)}
 
 
+def block_solid(run):
+    """The block's Born continuum (``lefm.Solid.of`` of the run's material): what ``lefm``'s formulas take."""
+    from .lefm import Solid
+    return Solid.of(_material(run))
+
+
 def _frame(t) -> float:
     return float(np.median(np.diff(t))) if len(t) > 1 else 0.0
 

@@ -5,8 +5,8 @@ Each run of ``run/studies/weakening_cohesive_zone*.toml`` holds a prestress and 
 it; each tip accelerates from rest towards c_R.  Along each tip's path ``analysis.zone`` gives, at every break,
 the weakening zone's width X_c at that instant (``front_zone``) and the tip's local speed; route 2 of
 ``analysis.cracks`` is fitted ahead of the zone at every frame (``zone_field``).  A row is one front at one
-stretch of its path: the sites whose local speed lies within ``BIN`` c_R of a target speed (``TARGETS``), their
-mean speed and width, and the mean G of the frames over that stretch, over Gamma.  Beside them, the law's
+stretch of its path: the longest run of consecutive sites whose local speed lies within ``BIN`` c_R of a target
+speed (``TARGETS``), their mean speed and width, and the mean G of the frames over that stretch, over Gamma.  Beside them, the law's
 static width and its contraction at the lattice's wave speeds (``analysis.lefm``):
 
     X_c0 = c M Gamma / (tau_p - tau_r)^2,  c = 1.4623 (``lefm.linear_slip_zone``, linear slip weakening),
@@ -30,10 +30,9 @@ import os
 import numpy as np
 
 from parslip.analysis import lefm, table
-from parslip.analysis.cracks import _material
 from parslip.analysis.fronts import wave_speeds
 from parslip.analysis.rupture import law_scales
-from parslip.analysis.zone import ORIGINS, front_zone, zone_field
+from parslip.analysis.zone import ORIGINS, block_solid, front_zone, zone_field
 from parslip.plot.figures import pyplot, save
 from parslip.studies.cracks import points, provenance, write
 
@@ -91,11 +90,11 @@ def front_rows(run, k: int, front, fronts: list, scales: dict) -> list[dict]:
     c_R, c_s, l = wave_speeds(run)["c_R"], wave_speeds(run)["c_s"], float(run.attrs["l"])
     lam = scales["Lambda"]
     fields = {o: zone_field(run, front, zone, (WINDOW[0] * lam, WINDOW[1] * lam), o) for o in ORIGINS}
-    solid = lefm.Solid.of(_material(run))
+    solid = block_solid(run)
     v = zone["v"] / c_R
     rows = []
     for target in TARGETS:
-        sel = np.flatnonzero((np.abs(v - target) <= BIN) & np.isfinite(zone["X_c"]))
+        sel = longest_run(np.flatnonzero((np.abs(v - target) <= BIN) & np.isfinite(zone["X_c"])))
         if len(sel) < MIN_SITES:
             continue
         t0, t1 = zone["t_break"][sel].min(), zone["t_break"][sel].max()
@@ -112,6 +111,17 @@ def front_rows(run, k: int, front, fronts: list, scales: dict) -> list[dict]:
                      "frames": int(np.count_nonzero((fields["centre"]["t"] >= t0) & (fields["centre"]["t"] <= t1))),
                      "reflection_margin": margin, "clean": margin > 0})
     return rows
+
+
+def longest_run(idx) -> np.ndarray:
+    """The longest stretch of consecutive indices in the sorted ``idx``: the sites a front crossed in one go
+    while its speed stayed in a band (the first such stretch of the longest length)."""
+    idx = np.asarray(idx, int)
+    if not len(idx):
+        return idx
+    cuts = np.flatnonzero(np.diff(idx) != 1) + 1
+    runs = np.split(idx, cuts)
+    return runs[int(np.argmax([len(r) for r in runs]))]
 
 
 def _mean_in(t, values, t0: float, t1: float) -> float:
@@ -134,7 +144,7 @@ def run_rows(row: dict, run) -> list[dict]:
                         "zeta": s["time.zeta"], "bottom_kn": s["material.bottom_kn"],
                         "contact": s["interface.contact"], "D_c": scales["D_c"],
                         "interface_dt": s["output.interface_dt"], "scene": row["scene"], "commit": row["commit"],
-                        "solid": lefm.Solid.of(_material(run)), "c_R_over_c_s": wave_speeds(run)["c_R"] /
+                        "solid": block_solid(run), "c_R_over_c_s": wave_speeds(run)["c_R"] /
                         wave_speeds(run)["c_s"]})
     return out
 
