@@ -29,6 +29,8 @@ OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
 PY=${PYTHON:-python}
+# the checkout's own package, not the one installed (a script under postprocess/ would import the installed one)
+export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
 MPIEXEC=${MPIEXEC:-mpiexec}
 mkdir -p "$OUT" "$DOCS/studies/img" "$DOCS/hpc"
 case "$what" in
