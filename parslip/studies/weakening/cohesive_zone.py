@@ -2,12 +2,15 @@
 Nature 2014), on the slip-weakening interface.
 
 Each run of ``run/studies/weakening_cohesive_zone*.toml`` holds a prestress and nucleates a bilateral crack in
-it; each tip accelerates from rest towards c_R.  Along each tip's path ``analysis.zone`` gives, at every break,
-the weakening zone's width X_c at that instant (``front_zone``) and the tip's local speed; route 2 of
-``analysis.cracks`` is fitted ahead of the zone at every frame (``zone_field``).  A row is one front at one
-stretch of its path: the longest run of consecutive sites whose local speed lies within ``BIN`` c_R of a target
-speed (``TARGETS``), their mean speed and width, and the mean G of the frames over that stretch, over Gamma.  Beside them, the law's
-static width and its contraction at the lattice's wave speeds (``analysis.lefm``):
+it; each tip leaves the forced nucleation and accelerates towards c_R.  Along each tip's path ``analysis.zone``
+gives, at every break, the weakening zone's width X_c at that instant (``front_zone``) and the tip's local speed;
+route 2 of ``analysis.cracks`` is fitted ahead of the zone at every frame (``zone_field``).  A row is one front at
+one stretch of its path: the longest run of consecutive sites its own rupture broke (``free_sites``) whose local
+speed lies within ``BIN`` c_R of a target speed (``TARGETS``), their mean speed and width, and the mean G of the
+frames over that stretch, over Gamma: ``G_field_over_Gamma`` with xi counted from the zone's tail (the break, as
+route 2 of ``analysis.cracks`` counts it), ``G_field_centre_over_Gamma`` and ``G_field_head_over_Gamma`` from its
+centre and head (the fit does not fix the origin; the three show what it moves).  Beside them, the law's static
+width and its contraction at the lattice's wave speeds (``analysis.lefm``):
 
     X_c0 = c M Gamma / (tau_p - tau_r)^2,  c = 1.4623 (``lefm.linear_slip_zone``, linear slip weakening),
     X_c_lefm(v) = X_c0 / A_II(v)            (Rice 1980; Freund 1990, Eqs. 6.2.32-35),
@@ -16,10 +19,12 @@ Gamma the law's whole fracture energy (the elastic share before the peak include
 (tau_p - tau_r)); ``X_c0_weakening`` reads Gamma as the weakening's area alone ((tau_p - tau_r) D_c / 2), the
 other end of what the elastic share can move.  Neither is fitted.
 
-Each row also says whether a reflected wave had reached the tip (``reflection_margin``: the earliest arrival at
-the row's last site of a P wave sent from anywhere on the run's fronts' paths, reflected by a block's far face
-or its lateral face, minus the row's last time; negative: a reflection had arrived) and how long the crack was
-(``half_length``, from the hypocentre, over X_c: small-scale yielding asks for many).
+Each row also says whether a reflected wave had reached the tip: ``reflection_margin`` (a/c_r), the earliest
+arrival at the row's sites of a P wave sent from anywhere on the run's fronts' paths (``reflection_times``: off a
+block's far face or its lateral face), minus the site's break, the least over the row (negative: a reflection
+had arrived); ``free_reflection_margin`` the same from the free rupture's sites alone (the forced nucleation
+grows slowly and sends little), which ``clean`` reads; and how long the crack was (``half_length``, a, from the
+hypocentre: small-scale yielding asks for many X_c).
 """
 from __future__ import annotations
 
