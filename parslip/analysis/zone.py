@@ -101,7 +101,8 @@ def zone_width(x, t_peak, t_break, direction: int, length: float, at=None) -> np
 def front_zone(run, front) -> dict:
     """The cohesive zone along a catalogued front of ``run`` (``analysis.results.Run``): per site of its path,
     "x" (l), "t_break", "t_peak" (l/c_r), "v" (the tip's local speed at the break, c_r, unsigned) and
-    "X_c" (a, ``zone_width`` at the break), and "sign", the sign of the traction the zone carries."""
+    "X_c" (a, ``zone_width`` at the break), "tau_reached" (the largest traction of its frames before its break,
+    rho c_r^2: the peak it reached, to a frame), and "sign", the sign of the traction the zone carries."""
     x = np.asarray(front.tip["x"], float)
     tb = np.asarray(front.tip["t"], float)
     n = len(run.x)
@@ -111,8 +112,10 @@ def front_zone(run, front) -> dict:
     sxy = np.asarray(run.interface["sxy"][np.flatnonzero(span)][:, sites], float)
     sign = 1.0 if np.nanmedian(sxy[0]) >= 0 else -1.0
     tp = peak_times(t[span], sxy, tb, sign)
+    before = t[span][:, None] < tb[None, :]
+    reached = np.where(before.any(axis=0), np.where(before, sign * sxy, -np.inf).max(axis=0), math.nan)
     l = float(run.attrs["l"])
-    return {"x": x, "sites": sites, "t_break": tb, "t_peak": tp, "sign": sign,
+    return {"x": x, "sites": sites, "t_break": tb, "t_peak": tp, "sign": sign, "tau_reached": reached,
             "v": np.abs(tip_speed_at(front, tb)), "X_c": zone_width(x, tp, tb, front.direction, l)}
 
 
