@@ -89,3 +89,19 @@ def test_peak_times_ignores_frames_after_the_break():
     s = np.array([0.0, 0.5, 1.0, 0.6, 0.2, 0.0, 0.0, 2.0, 3.0, 0.0, 0.0])[:, None]
     assert peak_times(times, s, [0.45])[0] == pytest.approx(0.2, abs=0.05)
     assert math.isnan(peak_times(times, s, [-1.0])[0])
+
+
+def test_the_local_static_zone_is_the_formula_at_the_peak_reached():
+    """X_c0_local (``studies.weakening.cohesive_zone.local_zone``) is c M Gamma / tau_p^2 recomputed with the peak
+    the sites reached: tau_p and x_b scaled by r, Gamma = tau_p (x_b + D_c) / 2, so X_c0 scales as
+    (r x_b + D_c) / ((x_b + D_c) r); r = 1 gives the scene's X_c0, and with a residual it is not defined."""
+    from parslip.studies.weakening.cohesive_zone import local_zone
+    scales = {"tau_p": 0.17, "tau_r": 0.0, "x_b": 0.5, "D_c": 3.0, "X_c0": 24.0}
+    assert local_zone(scales, 0.17)["X_c0"] == pytest.approx(24.0)
+    for r in (0.9, 1.1):
+        tp, xb = 0.17 * r, 0.5 * r
+        ratio = (tp * (xb + 3.0) / 2 / tp ** 2) / (0.17 * 3.5 / 2 / 0.17 ** 2)
+        got = local_zone(scales, tp)
+        assert got["ratio"] == pytest.approx(r)
+        assert got["X_c0"] == pytest.approx(24.0 * ratio)
+    assert math.isnan(local_zone({**scales, "tau_r": 0.01}, 0.17)["X_c0"])
