@@ -14,6 +14,9 @@
 #   bash postprocess/docs_numbers.sh cracks_supershear  # docs/studies/cracks_supershear.csv and img/cracks_supershear_*
 #   bash postprocess/docs_numbers.sh cracks_healing     # docs/studies/cracks_healing.csv and img/cracks_healing_*
 #     (docs/studies/cracks.md: each runs its sweeps run/studies/cracks_<study>*.toml, then postprocess/cracks.py)
+#   bash postprocess/docs_numbers.sh weakening_cohesive_zone  # docs/studies/weakening_cohesive_zone.csv and
+#     img/weakening_cohesive_zone_* (docs/studies/weakening.md: its sweeps run/studies/weakening_cohesive_zone*.toml,
+#     then postprocess/weakening_cohesive_zone.py)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
@@ -21,11 +24,13 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_cohesive_zone"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
 PY=${PYTHON:-python}
+# the checkout's own package, not the one installed (a script under postprocess/ would import the installed one)
+export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
 MPIEXEC=${MPIEXEC:-mpiexec}
 mkdir -p "$OUT" "$DOCS/studies/img" "$DOCS/hpc"
 case "$what" in
@@ -72,6 +77,11 @@ cracks_energy|cracks_precursors|cracks_supershear|cracks_healing)
         "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/cracks/$(basename "$f" .toml)"
     done
     "$PY" postprocess/cracks.py "$study" --dir "$OUT/cracks" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
+weakening_cohesive_zone)
+    for f in run/studies/weakening_cohesive_zone*.toml; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/weakening/$(basename "$f" .toml)"
+    done
+    "$PY" postprocess/weakening_cohesive_zone.py --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_cohesive_zone" >&2; exit 2 ;;
 esac

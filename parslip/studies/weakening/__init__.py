@@ -1,0 +1,1 @@
+"""The studies of the slip-weakening interface (docs/studies/weakening.md), a module each."""
