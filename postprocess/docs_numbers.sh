@@ -14,6 +14,11 @@
 #   bash postprocess/docs_numbers.sh cracks_supershear  # docs/studies/cracks_supershear.csv and img/cracks_supershear_*
 #   bash postprocess/docs_numbers.sh cracks_healing     # docs/studies/cracks_healing.csv and img/cracks_healing_*
 #     (docs/studies/cracks.md: each runs its sweeps run/studies/cracks_<study>*.toml, then postprocess/cracks.py)
+#   bash postprocess/docs_numbers.sh weakening_andrews  # docs/studies/weakening_andrews.csv, weakening_kammer.csv,
+#                                                       # img/weakening_andrews_* and img/weakening_kammer_*
+#   bash postprocess/docs_numbers.sh weakening_kammer   # the same: Kammer's speeds are measured on Andrews' runs
+#     (docs/studies/weakening.md: the sweeps run/studies/weakening_andrews*.toml, then postprocess/weakening.py
+#     andrews and kammer; one command makes both tables; ~20 min on 2 ranks of a shared machine)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
@@ -21,7 +26,7 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
@@ -72,6 +77,13 @@ cracks_energy|cracks_precursors|cracks_supershear|cracks_healing)
         "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/cracks/$(basename "$f" .toml)"
     done
     "$PY" postprocess/cracks.py "$study" --dir "$OUT/cracks" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
+weakening_andrews|weakening_kammer)
+    for f in run/studies/weakening_andrews*.toml; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/weakening/$(basename "$f" .toml)"
+    done
+    for study in andrews kammer; do
+        "$PY" postprocess/weakening.py "$study" --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies"
+    done ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer" >&2; exit 2 ;;
 esac
