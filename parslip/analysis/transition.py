@@ -58,6 +58,8 @@ def side(times: np.ndarray, centre: float, direction: int, unit: float = 1.0) ->
     i + 1/2): the sites on ``direction`` (+1, -1) of it in order, r their distance (a), t their rupture time
     from the earliest of ``times`` (times in l/c_r, ``unit`` = l in a: t in a/c_r), cut at the first site
     that did not break (the front stopped there)."""
+    if not np.isfinite(times).any():
+        return np.array([]), np.array([])
     x = np.arange(len(times)) + 0.5
     r = (x - centre) * direction
     idx = np.flatnonzero(r > 0)

@@ -26,7 +26,7 @@ from parslip.scene.derive import derive
 from . import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "S", "L_c", "L_trans", "L_andrews", "nucleation", "nucleation_over_Lc", "ratio",
-        "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "reach", "room", "reflection",
+        "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "reach", "room", "reflection", "uniform",
         "S_path", "Lambda", "tau_p", "tau_0", "Gamma", "kx", "zeta", "damping", "hold", "bottom_kn"]
 
 
@@ -49,16 +49,21 @@ def geometry(run) -> dict:
             "reflection": 2.0 * h / math.sqrt(wave_speeds(run)["c_l"] ** 2 - 1.0), "l": l}
 
 
-def path_prestress(run, g: dict) -> float:
-    """The mean shear traction (rho c_r^2) over the sites within the room of the centre, in the last frame
-    before the nucleation started: the prestress the rupture ran into."""
+def path_prestress(run, g: dict, within: float, tol: float = 0.05) -> tuple[float, float]:
+    """The prestress the rupture ran into, in the last frame before the nucleation started: the mean shear
+    traction (rho c_r^2) over the sites within ``within`` (a) of the centre, and how far from the centre (a,
+    the nearer side) the traction stays within ``tol`` of its mean over the central L_c-wide stretch (the free
+    edges of the finite block unload the contact near them)."""
     start = float(run.attrs["prestress_time"]) + float(run.scene["drive.prestress.settle"]) \
         + float(run.scene["interface.nucleation.start"])
     t = np.asarray(run.interface["t"], float)
     k = max(int(np.searchsorted(t, start)) - 1, 0)
-    x = np.arange(int(g["l"])) + 0.5
-    near = np.abs(x - g["centre"]) <= min(g["room"], g["reflection"])
-    return float(np.asarray(run.interface["sxy"])[k][near].mean())
+    sxy = np.asarray(run.interface["sxy"])[k]
+    r = np.arange(len(sxy)) + 0.5 - g["centre"]
+    mid = float(sxy[np.abs(r) <= max(g["half"], 1.0)].mean())
+    off = np.abs(sxy - mid) > tol * mid
+    uniform = min(float(np.min(np.abs(r)[off & (r * d > 0)], initial=g["l"])) for d in (1, -1))
+    return float(sxy[np.abs(r) <= within].mean()), uniform
 
 
 def sides(run, g: dict) -> list[dict]:
@@ -85,10 +90,12 @@ def measure(run) -> dict:
     Ls = [_counted(s, g) for s in both]
     L = float(np.mean(Ls)) if all(math.isfinite(v) for v in Ls) else math.nan
     bys = {s["by"] for s, v in zip(both, Ls) if math.isfinite(v)}
-    return {"scales": sc, "geometry": g, "sides": both, "L_trans": L, "L_sides": Ls,
+    L_andrews = float(lefm.andrews_f(sc["S"]) * sc["L_c"])
+    tau, uniform = path_prestress(run, g, min(L_andrews, g["room"]))
+    return {"scales": sc, "geometry": g, "sides": both, "L_trans": L, "L_sides": Ls, "L_andrews": L_andrews,
             "by": " / ".join(sorted(bys)) if math.isfinite(L) else None,
             "resolution": max(s["resolution"] for s in both) if math.isfinite(L) else math.nan,
-            "S_path_tau": path_prestress(run, g)}
+            "S_path_tau": tau, "uniform": uniform}
 
 
 def _row(sweep: str, row: dict, run) -> dict:
@@ -98,13 +105,14 @@ def _row(sweep: str, row: dict, run) -> dict:
     m = measure(run)
     sc, g, sc_ = m["scales"], m["geometry"], run.scene
     tp, tr, tau = sc["tau_p"], sc["tau_r"], m["S_path_tau"]
-    L_andrews = float(lefm.andrews_f(sc["S"]) * sc["L_c"])
+    L_andrews = m["L_andrews"]
     return {**out, "S": sc["S"], "L_c": sc["L_c"], "L_trans": m["L_trans"], "L_andrews": L_andrews,
             "nucleation": sc_["interface.nucleation.kind"], "nucleation_over_Lc": g["half"] / sc["L_c"],
             "ratio": m["L_trans"] / L_andrews, "trans_by": m["by"], "resolution": m["resolution"],
             "L_trans_plus": m["L_sides"][0], "L_trans_minus": m["L_sides"][1],
             "v_exit": float(np.nanmean([s["v_exit"] for s in m["sides"]])),
             "reach": min(s["reach"] for s in m["sides"]), "room": g["room"], "reflection": g["reflection"],
+            "uniform": m["uniform"],
             "S_path": (tp - tau) / (tau - tr), "Lambda": sc["Lambda"], "tau_p": tp, "tau_0": sc["tau_0"],
             "Gamma": sc["Gamma"], "kx": sc_["interface.kx"], "zeta": sc_["time.zeta"],
             "damping": sc_["time.damping"], "hold": sc_["drive.hold"], "bottom_kn": sc_["material.bottom_kn"],
@@ -116,10 +124,11 @@ def rows(runs: str) -> list[dict]:
     return [_row(os.path.basename(d), row, run) for d in sweeps(runs, "andrews") for row, run in points(d)]
 
 
-def _bound(r: dict) -> float:
-    """How far a front that did not turn supershear was seen to stay sub-c_s: to its reach, the room or the
-    reflected wave, whichever came first (a)."""
-    return min(r["reach"], r["room"], r["reflection"])
+def bound(r: dict) -> float:
+    """How far a front that did not turn supershear was seen to stay below c_s in the conditions Andrews
+    assumes: to its reach, the room, the reflected wave or the end of the uniform prestress, whichever came
+    first (a)."""
+    return min(r["reach"], r["room"], r["reflection"], r["uniform"])
 
 
 def transition_figure(rs, img, source):
@@ -139,14 +148,14 @@ def transition_figure(rs, img, source):
         hit = [r for r in mine if np.isfinite(r["L_trans"])]
         ax.plot([r["S"] for r in hit], [r["L_trans"] / r["L_c"] for r in hit], "o", color=c, label=label)
         miss = [r for r in mine if not np.isfinite(r["L_trans"])]
-        ax.plot([r["S"] for r in miss], [_bound(r) / r["L_c"] for r in miss], "^", color=c, mfc="none")
+        ax.plot([r["S"] for r in miss], [bound(r) / r["L_c"] for r in miss], "^", color=c, mfc="none")
         ax.plot([r["S"] for r in mine], [r["nucleation_over_Lc"] for r in mine], "_", color=c, ms=9)
     ax.set_yscale("log")
     ax.set_xlabel("S (the scene's: tau_p and tau_0 from parslip info)")
     ax.set_ylabel("L_trans / L_c")
     ax.legend(fontsize=6)
     ax.set_title("supershear transition, slip-weakening interface, matched pair\n"
-                 "^: none before the reflected wave, the room or the front's end (lower bound); "
+                 "^: none before the reflected wave, the room, the uniform prestress's end (lower bound); "
                  "-: the nucleation zone's half-width", fontsize=7)
     return save(fig, img, "weakening_andrews_transition", source)
 

@@ -40,7 +40,7 @@ def l0(scales: dict, c_s: float) -> float:
 def speeds(r: dict) -> tuple[np.ndarray, np.ndarray]:
     """(length, v) of the run's supershear front, the two sides' window speeds averaged where both have one."""
     m, g = r["_m"], r["_m"]["geometry"]
-    until = min(g["reflection"], g["room"] - WINDOW)
+    until = min(g["reflection"], g["room"] - WINDOW, m["uniform"])
     per = [transition.window_speeds(s["r"], s["t"], r["L_trans"], until, WINDOW) for s in m["sides"]]
     n = min(len(p[0]) for p in per)
     if n == 0:
