@@ -145,8 +145,11 @@ def transition_figure(rs, img, source):
               "weakening_andrews_lattice": ("tab:green", "lattice controls")}
     for sweep, (c, label) in styles.items():
         mine = [r for r in rs if r["sweep"] == sweep and np.isfinite(r["S"])]
-        hit = [r for r in mine if np.isfinite(r["L_trans"])]
-        ax.plot([r["S"] for r in hit], [r["L_trans"] / r["L_c"] for r in hit], "o", color=c, label=label)
+        for kind, mk in (("forced", "o"), ("time", "s")):
+            hit = [r for r in mine if np.isfinite(r["L_trans"]) and r["nucleation"] == kind]
+            if hit:
+                ax.plot([r["S"] for r in hit], [r["L_trans"] / r["L_c"] for r in hit], mk, color=c,
+                        mfc="none" if kind == "time" else c, label=f"{label}, {kind}")
         miss = [r for r in mine if not np.isfinite(r["L_trans"])]
         ax.plot([r["S"] for r in miss], [bound(r) / r["L_c"] for r in miss], "^", color=c, mfc="none")
         ax.plot([r["S"] for r in mine], [r["nucleation_over_Lc"] for r in mine], "_", color=c, ms=9)
@@ -155,8 +158,8 @@ def transition_figure(rs, img, source):
     ax.set_ylabel("L_trans / L_c")
     ax.legend(fontsize=6)
     ax.set_title("supershear transition, slip-weakening interface, matched pair\n"
-                 "^: none before the reflected wave, the room, the uniform prestress's end (lower bound); "
-                 "-: the nucleation zone's half-width", fontsize=7)
+                 "^: none before the reflected wave, the room or the uniform prestress's end (a lower bound)\n"
+                 "-: the nucleation zone's half-width; squares: time-weakening nucleation", fontsize=7)
     return save(fig, img, "weakening_andrews_transition", source)
 
 

@@ -76,7 +76,8 @@ def figure(ks, img, source):
     for i, k in enumerate(ks):
         x, v = k["_curve"]
         line, = ax.plot(x, v, "o-", ms=3, lw=0.8,
-                        label=f"{k['sweep'].replace('weakening_andrews', 'main')} {k['point']}, "
+                        label=f"{k['sweep'].replace('weakening_andrews_', '').replace('weakening_andrews', 'main')} "
+                              f"{k['point']}, {k['nucleation']}, "
                               f"r = {k['tau0_over_taup']:.2f}")
         grid = np.geomspace(5.0, 400.0, 60)
         ax.plot(grid, lefm.kammer_speed(grid, k["tau0_over_taup"], k["_solid"]), "--", lw=0.8,
