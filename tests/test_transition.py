@@ -106,3 +106,11 @@ def test_a_lattice_rupture_times_agree_with_its_frames_and_turn_supershear(tmp_p
     _, tf = T.side(seen, 80.0, 1, 160.0)
     keep = (r > 8.0) & (r < 60.0)
     assert np.polyfit(tf[keep], r[keep], 1)[0] > c_s
+
+
+def test_the_tables_write_numpy_floats_as_numbers(tmp_path):
+    """The study's rows carry numpy floats (``law_scales``): the CSV holds their digits, not their repr."""
+    from parslip.analysis import table
+    path = tmp_path / "t.csv"
+    table.write_csv(str(path), ["S", "L"], [{"S": np.float64(0.3000122), "L": 8.5}])
+    assert path.read_text().splitlines()[1] == "0.3000122,8.5"
