@@ -27,7 +27,8 @@ from . import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "S", "L_c", "L_trans", "L_andrews", "nucleation", "nucleation_over_Lc", "ratio",
         "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "reach", "room", "reflection", "uniform",
-        "S_path", "Lambda", "tau_p", "tau_0", "Gamma", "kx", "zeta", "damping", "hold", "bottom_kn"]
+        "S_path", "Lambda", "tau_p", "tau_0", "Gamma", "kx", "softening", "heal_time", "zeta", "damping", "hold",
+        "bottom_kn"]
 
 
 def scales(run) -> dict:
@@ -114,7 +115,8 @@ def _row(sweep: str, row: dict, run) -> dict:
             "reach": min(s["reach"] for s in m["sides"]), "room": g["room"], "reflection": g["reflection"],
             "uniform": m["uniform"],
             "S_path": (tp - tau) / (tau - tr), "Lambda": sc["Lambda"], "tau_p": tp, "tau_0": sc["tau_0"],
-            "Gamma": sc["Gamma"], "kx": sc_["interface.kx"], "zeta": sc_["time.zeta"],
+            "Gamma": sc["Gamma"], "kx": sc_["interface.kx"], "softening": sc_["interface.softening"],
+            "heal_time": sc_["interface.heal_time"], "zeta": sc_["time.zeta"],
             "damping": sc_["time.damping"], "hold": sc_["drive.hold"], "bottom_kn": sc_["material.bottom_kn"],
             "_m": m, "_run": run}
 
@@ -142,7 +144,8 @@ def transition_figure(rs, img, source):
     ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
     styles = {"weakening_andrews": ("tab:blue", "forced, main sweep"),
               "weakening_andrews_nucleation": ("tab:orange", "nucleation controls"),
-              "weakening_andrews_lattice": ("tab:green", "lattice controls")}
+              "weakening_andrews_lattice": ("tab:green", "lattice controls"),
+              "weakening_andrews_healing": ("tab:red", "bonds that do not re-form")}
     for sweep, (c, label) in styles.items():
         mine = [r for r in rs if r["sweep"] == sweep and np.isfinite(r["S"])]
         for kind, mk in (("forced", "o"), ("time", "s")):
