@@ -18,7 +18,7 @@
 #                                                       # img/weakening_andrews_* and img/weakening_kammer_*
 #   bash postprocess/docs_numbers.sh weakening_kammer   # the same: Kammer's speeds are measured on Andrews' runs
 #     (docs/studies/weakening.md: the sweeps run/studies/weakening_andrews*.toml, then postprocess/weakening.py
-#     andrews and kammer; one command makes both tables; about 33 min on 2 ranks of a loaded machine)
+#     andrews and kammer; one command makes both tables: 10 min on 2 ranks, 33 min when the machine is loaded)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
