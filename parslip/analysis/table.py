@@ -83,7 +83,7 @@ def _cell(v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, float):
-        return repr(v)
+        return repr(float(v))           # numpy 2's repr of an np.float64 is "np.float64(...)"
     return str(v)
 
 
