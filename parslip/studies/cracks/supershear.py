@@ -76,14 +76,21 @@ def _row(sweep: str, row: dict, run) -> dict:
             "_front": front, "_run": run, "_tr": tr}
 
 
-def transition_figure(rows, img, source):
-    """L_trans / L_c against S, beside Andrews' 9.8 (1.77 - S)^-3 and its factor-1.5 band."""
+def andrews_axes(s_max: float):
+    """A figure whose axes hold Andrews' L_trans / L_c = 9.8 (1.77 - S)^-3 over 0 <= S <= s_max and its
+    factor-1.5 band: what a transition study's points are set beside."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 4))
-    S = np.linspace(0.0, 1.72, 300)
+    S = np.linspace(0.0, s_max, 300)
     f = rupture.andrews_f(S)
     ax.plot(S, f, "k-", lw=1, label="Andrews (1976), Xia et al. (2004): 9.8 (1.77 - S)$^{-3}$")
     ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
+    return fig, ax
+
+
+def transition_figure(rows, img, source):
+    """L_trans / L_c against S, beside Andrews' 9.8 (1.77 - S)^-3 and its factor-1.5 band."""
+    fig, ax = andrews_axes(1.72)
     for sweep, c in zip(sorted({r["sweep"] for r in rows}), ("tab:blue", "tab:orange", "tab:green")):
         mine = [r for r in rows if r["sweep"] == sweep and np.isfinite(r["S"])]
         for by, m in (("daughter", "o"), ("tip above c_s", "s")):

@@ -23,6 +23,7 @@ from parslip.model.physics import ROW_HEIGHT
 from parslip.plot.figures import pyplot, save
 from parslip.scene.derive import derive
 
+from ..cracks.supershear import andrews_axes
 from . import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "S", "L_c", "L_trans", "L_andrews", "nucleation", "nucleation_over_Lc", "ratio",
@@ -136,12 +137,7 @@ def bound(r: dict) -> float:
 def transition_figure(rs, img, source):
     """L_trans / L_c against S beside Andrews' f(S) and its factor-1.5 band; open triangles: no transition
     before the bound (a lower bound); the nucleation zone's half-width as a dash."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5.5, 4))
-    S = np.linspace(0.0, 1.6, 300)
-    f = lefm.andrews_f(S)
-    ax.plot(S, f, "k-", lw=1, label="Andrews (1976), Xia et al. (2004): 9.8 (1.77 - S)$^{-3}$")
-    ax.fill_between(S, f / 1.5, f * 1.5, color="0.85", label="factor 1.5")
+    fig, ax = andrews_axes(1.6)
     styles = {"weakening_andrews": ("tab:blue", "forced, main sweep"),
               "weakening_andrews_nucleation": ("tab:orange", "nucleation controls"),
               "weakening_andrews_lattice": ("tab:green", "lattice controls"),
