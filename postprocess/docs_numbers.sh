@@ -29,7 +29,7 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer|weakening_cohesive_zone"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer|weakening_cohesive_zone|weakening_shape"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
@@ -94,6 +94,11 @@ weakening_andrews|weakening_kammer)
     for study in andrews kammer; do
         "$PY" postprocess/weakening.py "$study" --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies"
     done ;;
+weakening_shape)
+    for f in run/studies/weakening_shape*.toml; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/weakening/$(basename "$f" .toml)"
+    done
+    "$PY" postprocess/weakening.py shape --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer, weakening_cohesive_zone" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer, weakening_cohesive_zone, weakening_shape" >&2; exit 2 ;;
 esac

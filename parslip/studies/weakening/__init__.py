@@ -21,9 +21,9 @@ import os
 
 from ..cracks import points, provenance, write  # noqa: F401  (the sweeps' reader and the tables' writer)
 
-STUDIES = ("andrews", "kammer")
+STUDIES = ("andrews", "kammer", "shape")
 # The sweeps each study reads: Kammer's speeds are measured on Andrews' runs.
-SWEEPS = {"andrews": "andrews", "kammer": "andrews"}
+SWEEPS = {"andrews": "andrews", "kammer": "andrews", "shape": "shape"}
 
 
 def sweeps(runs: str, study: str) -> list[str]:
