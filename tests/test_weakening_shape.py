@@ -16,43 +16,49 @@ from parslip.studies import sweep as S
 from parslip.studies.weakening import shape
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SWEEP = os.path.join(ROOT, "run", "studies", "weakening_shape.toml")
-SHARES = (0.125, 0.25, 0.4991, 0.75, 1.0)
+# The study's sweeps and the elastic shares of their points, in order.
+SHARES = {"weakening_shape.toml": (0.125, 0.25, 0.4991, 0.75, 1.0), "weakening_shape_normal.toml": (0.125, 0.25)}
 
 
 def _scenes():
-    """Each point of the study's sweep, resolved (the base scene under the point's overrides)."""
+    """Each point of the study's sweeps, resolved (the base scene under the point's overrides), with its
+    sweep's file name."""
     cwd = os.getcwd()
     os.chdir(ROOT)                                 # the sweep's base is relative to the checkout
     try:
-        sw = S.load_sweep(SWEEP)
-        return [load(sw.base, sets=dict(p.sets)) for p in sw.points]
+        out = []
+        for name in SHARES:
+            sw = S.load_sweep(os.path.join(ROOT, "run", "studies", name))
+            out += [(name, load(sw.base, sets=dict(p.sets))) for p in sw.points]
+        return out
     finally:
         os.chdir(cwd)
 
 
 @pytest.fixture(scope="module")
 def swept():
-    return [(sc, law_scales(derive(sc))) for sc in _scenes()]
+    return [(name, sc, law_scales(derive(sc))) for name, sc in _scenes()]
 
 
-def test_the_sweep_holds_tau_p_gamma_lc_and_lambda_and_varies_the_share(swept):
-    """tau_p, Gamma (so D_c,eff, L_c, Lambda) within 0.2 % on every point; the shares the sweep names; L_c and
-    Lambda at least 5 sites; S the same."""
-    sc = [s for _, s in swept]
+def test_the_sweeps_hold_tau_p_gamma_lc_and_lambda_and_vary_the_share(swept):
+    """tau_p, Gamma (so D_c,eff, L_c, Lambda) within 0.2 % on every point of both sweeps; the shares each
+    names; L_c and Lambda at least 5 sites; S the same."""
+    sc = [s for _, _, s in swept]
     for key in ("tau_p", "Gamma", "L_c", "Lambda", "S"):
         v = np.array([s[key] for s in sc])
         assert np.ptp(v) <= 2e-3 * abs(v.mean()), (key, v)
     assert min(min(s["L_c"], s["Lambda"]) for s in sc) >= 5.0
-    assert np.allclose([shape.elastic_share(s) for s in sc], SHARES, atol=1e-3)
+    for name, shares in SHARES.items():
+        got = [shape.elastic_share(s) for n, _, s in swept if n == name]
+        assert np.allclose(got, shares, atol=1e-3), (name, got)
     assert np.allclose([shape.effective_dc(s) for s in sc], 0.99826, rtol=2e-3)
 
 
 def test_the_share_is_the_laws_closed_form(swept):
     """s = x_b / (x_b + D_c) at tau_r = 0, x_b = sqrt(delta_b^2 - y^2), y = delta0 - (F_N / N) / k_y, from the
-    scene's numbers alone (not through ``law_scales``); the edges peak at least 2.2 times the contact's x_b,
+    scene's numbers alone (not through ``law_scales``; y at the scene's k_y); the edges peak at least 2.2 times the contact's x_b,
     with delta_b at least study 1's 1.2 a."""
-    for scene, sc in swept:
+    for _, scene, sc in swept:
         y = scene["interface.delta0"] - scene["load.FN"] / scene["lattice.top_cols"] / scene["interface.ky"]
         xb = math.sqrt(scene["interface.delta_b"] ** 2 - y ** 2)
         assert shape.elastic_share(sc) == pytest.approx(xb / (xb + scene["interface.softening"]), rel=1e-9)
@@ -73,7 +79,7 @@ def test_a_law_with_a_residual_shares_gamma_as_its_areas():
 def test_the_nucleation_length_through_lambda_is_uenishi_and_rice_in_the_law_own_units(swept):
     """1.158 M D_c / (tau_p - tau_r) with M and the bond's peak force per a in the engine's units (from the
     law itself, ``InterfaceLaw.strength``) equals the unit-free route through Lambda."""
-    for scene, sc in swept:
+    for _, scene, sc in swept:
         st = derive(scene)
         v = st.law.strength(st.lattice.n_top_sites, scene["load.FN"])
         mid = len(v["tau_p"]) // 2

@@ -68,13 +68,15 @@ def path_prestress(run, g: dict, within: float, tol: float = 0.05) -> tuple[floa
     return float(sxy[np.abs(r) <= within].mean()), uniform
 
 
-def sides(run, g: dict) -> list[dict]:
-    """``transition.transition_distance`` of each side (+x, -x) of the rupture, with its (r, t) arrivals."""
+def sides(run, g: dict, within: float = math.inf) -> list[dict]:
+    """``transition.transition_distance`` of each side (+x, -x) of the rupture, with its (r, t) arrivals, those
+    up to ``within`` (a) from the hypocentre (all by default)."""
     times = transition.rupture_times(run, float(run.attrs["prestress_time"]))
     c_s = wave_speeds(run)["c_s"]
     out = []
     for d in (1, -1):
         r, t = transition.side(times, g["centre"], d, g["l"])
+        r, t = r[r <= within], t[r <= within]
         out.append({**transition.transition_distance(r, t, c_s, g["half"]), "r": r, "t": t, "direction": d})
     return out
 
@@ -85,10 +87,12 @@ def _counted(side: dict, g: dict) -> float:
     return L if math.isfinite(L) and L <= min(g["reflection"], g["room"]) else math.nan
 
 
-def measure(run) -> dict:
-    """The run's scales, geometry, both sides and their mean L_trans (NaN when a side has none counted)."""
+def measure(run, cut: bool = False) -> dict:
+    """The run's scales, geometry, both sides and their mean L_trans (NaN when a side has none counted); with
+    ``cut``, each side's arrivals only up to the reflected wave or the room (so that a break the strong edge
+    or a reflection caused beyond them is not taken for a daughter that hides the tip's own transition)."""
     sc, g = scales(run), geometry(run)
-    both = sides(run, g)
+    both = sides(run, g, min(g["reflection"], g["room"]) if cut else math.inf)
     Ls = [_counted(s, g) for s in both]
     L = float(np.mean(Ls)) if all(math.isfinite(v) for v in Ls) else math.nan
     bys = {s["by"] for s, v in zip(both, Ls) if math.isfinite(v)}

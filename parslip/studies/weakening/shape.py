@@ -10,7 +10,7 @@ and its elastic share is the first term over Gamma, s = tau_p x_b / (2 Gamma) (x
 0).  Andrews' law is s = 0 (rigid to the peak), the paper's bond s = 1 (D_c = 0).  The points of
 ``run/studies/weakening_shape*.toml`` keep tau_p, Gamma (so D_c,eff, L_c and Lambda) and the nucleation and
 trade x_b (through k_x and delta_b) against D_c.  S, L_c, Lambda and L_trans are measured as in study 1
-(``andrews.measure``).  Beside them, without a free parameter:
+(``andrews.measure``), each side's arrivals up to the reflected wave or the strong edge.  Beside them, without a free parameter:
 
     L_nuc    = 1.158 M D_c / (tau_p - tau_r)          the weakening branch's nucleation length (a; Uenishi &
                                                       Rice 2003), which sets the daughter crack's (Dunham 2007)
@@ -31,6 +31,7 @@ import numpy as np
 
 from parslip.analysis import lefm
 from parslip.analysis.fronts import wave_speeds
+from parslip.io.contract import EVENT_BREAK
 from parslip.model.physics import ROW_HEIGHT
 from parslip.plot.figures import pyplot, save
 
@@ -41,9 +42,9 @@ from . import andrews, points, provenance, sweeps, write
 UENISHI_RICE = 1.158
 
 COLS = ["sweep", "point", "S", "elastic_share", "Gamma", "L_trans", "L_c", "L_trans_over_Lc", "L_dunham",
-        "L_nuc", "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "t_trans", "t_reflect",
+        "L_nuc", "early_breaks", "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "t_trans", "t_reflect",
         "reflection", "room", "uniform", "nucleation_over_Lc", "S_path", "Lambda", "tau_p", "tau_0", "x_b", "D_c",
-        "D_c_eff", "kx", "delta_b", "heal_time", "zeta", "damping", "hold", "bottom_kn"]
+        "D_c_eff", "kx", "ky", "delta_b", "heal_time", "zeta", "damping", "hold", "bottom_kn"]
 
 
 def effective_dc(sc: dict) -> float:
@@ -98,11 +99,28 @@ def _timing(m: dict, run) -> tuple[float, float]:
     return t, reflection_time(max(m["L_sides"]), h, wave_speeds(run)["c_l"])
 
 
+def early_breaks(run) -> int:
+    """How many sites broke before the nucleation started (the held prestress reached, settled and the
+    nucleation's delay passed); every site that broke when the prestress was never reached.  Such a run's
+    rupture did not start from the nucleation: it has no L_trans."""
+    sc = run.scene
+    start = float(run.attrs["prestress_time"]) + float(sc["drive.prestress.settle"]) \
+        + float(sc["interface.nucleation.start"])
+    ev = run.interface["events"]
+    brk = np.asarray(ev["kind"]) == EVENT_BREAK
+    t = np.asarray(ev["time"], float)[brk]
+    early = t < start if math.isfinite(start) else np.ones(len(t), bool)
+    return int(len(np.unique(np.asarray(ev["site"])[brk][early])))
+
+
 def _row(sweep: str, row: dict, run) -> dict:
     out = {"sweep": sweep, "point": row["point"], "scene": row["scene"], "commit": row["commit"]}
     if run is None:
         return {**out, **{c: math.nan for c in COLS if c not in out}}
-    m = andrews.measure(run)
+    m = andrews.measure(run, cut=True)
+    early = early_breaks(run)
+    if early:                                      # a rupture the nucleation did not start: no L_trans
+        m = {**m, "L_trans": math.nan, "L_sides": [math.nan, math.nan], "by": "broke before the nucleation"}
     sc, g, sc_ = m["scales"], m["geometry"], run.scene
     share = elastic_share(sc)
     t_trans, t_reflect = _timing(m, run)
@@ -111,12 +129,12 @@ def _row(sweep: str, row: dict, run) -> dict:
             "L_c": sc["L_c"], "L_trans_over_Lc": m["L_trans"] / sc["L_c"],
             "L_dunham": dunham_length(sc["S"], sc["L_c"], share),
             "L_nuc": nucleation_length(sc["Lambda"], sc["D_c"], effective_dc(sc)),
-            "trans_by": m["by"], "resolution": m["resolution"], "L_trans_plus": m["L_sides"][0],
+            "early_breaks": early, "trans_by": m["by"], "resolution": m["resolution"], "L_trans_plus": m["L_sides"][0],
             "L_trans_minus": m["L_sides"][1], "v_exit": float(np.nanmean([s["v_exit"] for s in m["sides"]])),
             "t_trans": t_trans, "t_reflect": t_reflect, "reflection": g["reflection"], "room": g["room"],
             "uniform": m["uniform"], "nucleation_over_Lc": g["half"] / sc["L_c"], "S_path": (tp - tau) / (tau - tr),
             "Lambda": sc["Lambda"], "tau_p": tp, "tau_0": sc["tau_0"], "x_b": sc["x_b"], "D_c": sc["D_c"],
-            "D_c_eff": effective_dc(sc), "kx": sc_["interface.kx"], "delta_b": sc_["interface.delta_b"],
+            "D_c_eff": effective_dc(sc), "kx": sc_["interface.kx"], "ky": sc_["interface.ky"], "delta_b": sc_["interface.delta_b"],
             "heal_time": sc_["interface.heal_time"], "zeta": sc_["time.zeta"], "damping": sc_["time.damping"],
             "hold": sc_["drive.hold"], "bottom_kn": sc_["material.bottom_kn"], "_m": m, "_run": run}
 
@@ -128,7 +146,8 @@ def rows(runs: str) -> list[dict]:
 
 def share_figure(rs, img, source):
     """L_trans / L_c against the elastic share, beside Andrews' f(S) (share 0), the scaling of the daughter's
-    nucleation length f(S) (1 - s) and L_nuc / L_c; open triangles: no transition before the bound."""
+    nucleation length f(S) (1 - s) and L_nuc / L_c; open triangles: no transition before the bound; crosses: a
+    run whose contact broke before the nucleation (no L_trans)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 4))
     ok = [r for r in rs if "_m" in r]
@@ -141,17 +160,23 @@ def share_figure(rs, img, source):
         r0 = ok[0]
         ax.plot(s, nucleation_length(r0["Lambda"], 1 - s, 1.0) / r0["L_c"], "k:", lw=1,
                 label="L_nuc / L_c (Uenishi & Rice 2003)")
-    hit = [r for r in ok if math.isfinite(r["L_trans"])]
-    miss = [r for r in ok if not math.isfinite(r["L_trans"])]
-    ax.plot([r["elastic_share"] for r in hit], [r["L_trans_over_Lc"] for r in hit], "o", color="tab:red",
-            label="lattice, bonds that do not re-form")
-    ax.plot([r["elastic_share"] for r in miss], [andrews.bound(r) / r["L_c"] for r in miss], "^",
-            color="tab:red", mfc="none", label="lattice: none before the bound")
+    for sweep, (c, label) in {"weakening_shape": ("tab:red", "k_y = 0.3"),
+                              "weakening_shape_normal": ("tab:blue", "k_y = 1.2")}.items():
+        mine = [r for r in ok if r["sweep"] == sweep]
+        hit = [r for r in mine if math.isfinite(r["L_trans"])]
+        miss = [r for r in mine if not math.isfinite(r["L_trans"]) and not r["early_breaks"]]
+        early = [r for r in mine if r["early_breaks"]]
+        ax.plot([r["elastic_share"] for r in hit], [r["L_trans_over_Lc"] for r in hit], "o", color=c,
+                mfc=c if sweep == "weakening_shape" else "none", label=f"lattice, {label}")
+        ax.plot([r["elastic_share"] for r in miss], [andrews.bound(r) / r["L_c"] for r in miss], "^", color=c,
+                mfc="none")
+        ax.plot([r["elastic_share"] for r in early], [0.2] * len(early), "x", color=c,
+                label=f"{label}: broke before the nucleation" if early else None)
     ax.plot([r["elastic_share"] for r in ok], [r["nucleation_over_Lc"] for r in ok], "_", color="0.3", ms=10,
             label="the forced zone's half-width")
     ax.set_xlim(-0.03, 1.03)
     ax.set_ylim(0, None)
-    ax.set_xlabel("elastic share s = tau_p x_b / (2 Gamma)   (0: Andrews' law, 1: the paper's bond)")
+    ax.set_xlabel("elastic share s = tau_p x_b / (2 Gamma)  (0: Andrews' law, 1: the paper's)")
     ax.set_ylabel("L_trans / L_c")
     ax.legend(fontsize=6)
     ax.set_title("supershear transition at one S and one Gamma against the law's shape", fontsize=8)
@@ -165,11 +190,12 @@ def tips_figure(rs, img, source):
     fig, ax = plt.subplots(figsize=(5.5, 4))
     waves, reach = None, 0.0
     for r in rs:
-        if "_m" not in r:
+        if "_m" not in r or r["early_breaks"]:
             continue
         waves = waves or wave_speeds(r["_run"])
         s = r["_m"]["sides"][0]
-        line, = ax.plot(s["t"], s["r"], lw=1, label=f"s = {r['elastic_share']:.3g}")
+        line, = ax.plot(s["t"], s["r"], lw=1, ls="-" if r["sweep"] == "weakening_shape" else "--",
+                        label=f"s = {r['elastic_share']:.3g}, k_y = {r['ky']:.2g}")
         if math.isfinite(r["L_trans_plus"]):
             ax.plot(_at(s, r["L_trans_plus"]), r["L_trans_plus"], "o", color=line.get_color(), ms=4)
         reach = max(reach, r["reflection"])
