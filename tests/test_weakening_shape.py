@@ -17,7 +17,8 @@ from parslip.studies.weakening import shape
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # The study's sweeps and the elastic shares of their points, in order.
-SHARES = {"weakening_shape.toml": (0.125, 0.25, 0.4991, 0.75, 1.0), "weakening_shape_normal.toml": (0.125, 0.25)}
+SHARES = {"weakening_shape.toml": (0.125, 0.25, 0.4991, 0.75, 1.0), "weakening_shape_normal.toml": (0.125, 0.25),
+          "weakening_shape_zone.toml": (0.125, 1.0)}
 
 
 def _scenes():

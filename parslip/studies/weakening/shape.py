@@ -144,6 +144,12 @@ def rows(runs: str) -> list[dict]:
     return [_row(os.path.basename(d), row, run) for d in sweeps(runs, "shape") for row, run in points(d)]
 
 
+# Each sweep's colour and label in the figures.
+STYLES = {"weakening_shape": ("tab:red", "k_y = 0.3, zone 1.5 L_c"),
+          "weakening_shape_normal": ("tab:blue", "k_y = 1.2, zone 1.5 L_c"),
+          "weakening_shape_zone": ("tab:green", "zone 2.5 L_c")}
+
+
 def share_figure(rs, img, source):
     """L_trans / L_c against the elastic share, beside Andrews' f(S) (share 0), the scaling of the daughter's
     nucleation length f(S) (1 - s) and L_nuc / L_c; open triangles: no transition before the bound; crosses: a
@@ -160,14 +166,13 @@ def share_figure(rs, img, source):
         r0 = ok[0]
         ax.plot(s, nucleation_length(r0["Lambda"], 1 - s, 1.0) / r0["L_c"], "k:", lw=1,
                 label="L_nuc / L_c (Uenishi & Rice 2003)")
-    for sweep, (c, label) in {"weakening_shape": ("tab:red", "k_y = 0.3"),
-                              "weakening_shape_normal": ("tab:blue", "k_y = 1.2")}.items():
+    for sweep, (c, label) in STYLES.items():
         mine = [r for r in ok if r["sweep"] == sweep]
         hit = [r for r in mine if math.isfinite(r["L_trans"])]
         miss = [r for r in mine if not math.isfinite(r["L_trans"]) and not r["early_breaks"]]
         early = [r for r in mine if r["early_breaks"]]
         ax.plot([r["elastic_share"] for r in hit], [r["L_trans_over_Lc"] for r in hit], "o", color=c,
-                mfc=c if sweep == "weakening_shape" else "none", label=f"lattice, {label}")
+                mfc="none" if sweep.endswith("normal") else c, label=f"lattice, {label}")
         ax.plot([r["elastic_share"] for r in miss], [andrews.bound(r) / r["L_c"] for r in miss], "^", color=c,
                 mfc="none")
         ax.plot([r["elastic_share"] for r in early], [0.2] * len(early), "x", color=c,
@@ -194,8 +199,9 @@ def tips_figure(rs, img, source):
             continue
         waves = waves or wave_speeds(r["_run"])
         s = r["_m"]["sides"][0]
-        line, = ax.plot(s["t"], s["r"], lw=1, ls="-" if r["sweep"] == "weakening_shape" else "--",
-                        label=f"s = {r['elastic_share']:.3g}, k_y = {r['ky']:.2g}")
+        line, = ax.plot(s["t"], s["r"], lw=1, ls={"weakening_shape": "-", "weakening_shape_normal": "--"}.get(
+            r["sweep"], ":"), label=f"s = {r['elastic_share']:.3g}, k_y = {r['ky']:.2g}, zone "
+            f"{r['nucleation_over_Lc']:.2g} L_c")
         if math.isfinite(r["L_trans_plus"]):
             ax.plot(_at(s, r["L_trans_plus"]), r["L_trans_plus"], "o", color=line.get_color(), ms=4)
         reach = max(reach, r["reflection"])
