@@ -10,7 +10,10 @@ and its elastic share is the first term over Gamma, s = tau_p x_b / (2 Gamma) (x
 0).  Andrews' law is s = 0 (rigid to the peak), the paper's bond s = 1 (D_c = 0).  The points of
 ``run/studies/weakening_shape*.toml`` keep tau_p, Gamma (so D_c,eff, L_c and Lambda) and the nucleation and
 trade x_b (through k_x and delta_b) against D_c.  S, L_c, Lambda and L_trans are measured as in study 1
-(``andrews.measure``), each side's arrivals up to the reflected wave or the strong edge.  Beside them, without a free parameter:
+(``andrews.measure``), each side's arrivals up to the reflected wave or the strong edge, with one change:
+L_trans is read beyond where the rupture first ran ahead of its forced front (``free_start``), which may lie
+inside the zone, not beyond the zone's edge (study 1's reading, kept as ``L_zone``): a zone widened past where
+the rupture already runs by itself would otherwise move L_trans without changing the run.  Beside them, without a free parameter:
 
     L_nuc    = 1.158 M D_c / (tau_p - tau_r)          the weakening branch's nucleation length (a; Uenishi &
                                                       Rice 2003), which sets the daughter crack's (Dunham 2007)
@@ -29,7 +32,7 @@ import os
 
 import numpy as np
 
-from parslip.analysis import lefm
+from parslip.analysis import lefm, transition
 from parslip.analysis.fronts import wave_speeds
 from parslip.io.contract import EVENT_BREAK
 from parslip.model.physics import ROW_HEIGHT
@@ -42,7 +45,7 @@ from . import andrews, points, provenance, sweeps, write
 UENISHI_RICE = 1.158
 
 COLS = ["sweep", "point", "S", "elastic_share", "Gamma", "L_trans", "L_c", "L_trans_over_Lc", "L_dunham",
-        "L_nuc", "early_breaks", "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "t_trans", "t_reflect",
+        "L_nuc", "early_breaks", "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "free", "L_zone", "v_exit", "t_trans", "t_reflect",
         "reflection", "room", "uniform", "nucleation_over_Lc", "S_path", "Lambda", "tau_p", "tau_0", "x_b", "D_c",
         "D_c_eff", "kx", "ky", "delta_b", "heal_time", "zeta", "damping", "hold", "bottom_kn"]
 
@@ -113,14 +116,53 @@ def early_breaks(run) -> int:
     return int(len(np.unique(np.asarray(ev["site"])[brk][early])))
 
 
+def free_start(r: np.ndarray, t: np.ndarray, forced: np.ndarray, half: float,
+               min_lead: float = transition.MIN_LEAD) -> float:
+    """Where the rupture ran ahead of its forced nucleation (a): the first site within the zone's half-width
+    ``half`` that broke ``min_lead`` (a/c_r) or more before the forcing reached it (``forced``: the forcing's
+    arrival at each r, on the clock of ``t``); ``half`` when none did (the rupture left the zone by itself only
+    at its edge).  Beyond it the rupture runs by itself: a transition there is the rupture's, not the zone's."""
+    ahead = np.flatnonzero((r < half) & (t <= forced - min_lead))
+    return float(r[ahead[0]]) if len(ahead) else float(half)
+
+
+def remeasure(m: dict, run) -> dict:
+    """``andrews.measure``'s result with each side's L_trans read beyond where the rupture ran ahead of the
+    forced front (``free_start``) rather than beyond the zone's edge; study 1's reading kept as "L_zone".
+    The forcing reaches r at r / nucleation.speed after the nucleation's start (a time-weakening zone, all at
+    once: the zone's edge stays the start)."""
+    g, sc = m["geometry"], run.scene
+    c_s = wave_speeds(run)["c_s"]
+    l, v = g["l"], float(sc["interface.nucleation.speed"])
+    times = transition.rupture_times(run, float(run.attrs["prestress_time"]))
+    start = float(run.attrs["prestress_time"]) + float(sc["drive.prestress.settle"]) \
+        + float(sc["interface.nucleation.start"])
+    origin = (start - np.nanmin(times)) * l if np.isfinite(times).any() else 0.0   # the start, a/c_r from t = 0
+    sides, Ls = [], []
+    for side in m["sides"]:
+        r, t = side["r"], side["t"]
+        free = free_start(r, t, origin + r / v, g["half"]) if v > 0 else g["half"]
+        got = {**side, **transition.transition_distance(r, t, c_s, free), "free": free,
+               "v_exit": side["v_exit"]}
+        sides.append(got)
+        Ls.append(andrews._counted(got, g))
+    L = float(np.mean(Ls)) if all(math.isfinite(x) for x in Ls) else math.nan
+    bys = {s["by"] for s, x in zip(sides, Ls) if math.isfinite(x)}
+    return {**m, "sides": sides, "L_sides": Ls, "L_trans": L, "L_zone": m["L_trans"],
+            "by": " / ".join(sorted(bys)) if math.isfinite(L) else None,
+            "resolution": max(s["resolution"] for s in sides) if math.isfinite(L) else math.nan,
+            "free": float(np.mean([s["free"] for s in sides]))}
+
+
 def _row(sweep: str, row: dict, run) -> dict:
     out = {"sweep": sweep, "point": row["point"], "scene": row["scene"], "commit": row["commit"]}
     if run is None:
         return {**out, **{c: math.nan for c in COLS if c not in out}}
-    m = andrews.measure(run, cut=True)
+    m = remeasure(andrews.measure(run, cut=True), run)
     early = early_breaks(run)
     if early:                                      # a rupture the nucleation did not start: no L_trans
-        m = {**m, "L_trans": math.nan, "L_sides": [math.nan, math.nan], "by": "broke before the nucleation"}
+        m = {**m, "L_trans": math.nan, "L_sides": [math.nan, math.nan], "L_zone": math.nan,
+             "by": "broke before the nucleation"}
     sc, g, sc_ = m["scales"], m["geometry"], run.scene
     share = elastic_share(sc)
     t_trans, t_reflect = _timing(m, run)
@@ -129,14 +171,16 @@ def _row(sweep: str, row: dict, run) -> dict:
             "L_c": sc["L_c"], "L_trans_over_Lc": m["L_trans"] / sc["L_c"],
             "L_dunham": dunham_length(sc["S"], sc["L_c"], share),
             "L_nuc": nucleation_length(sc["Lambda"], sc["D_c"], effective_dc(sc)),
-            "early_breaks": early, "trans_by": m["by"], "resolution": m["resolution"], "L_trans_plus": m["L_sides"][0],
-            "L_trans_minus": m["L_sides"][1], "v_exit": float(np.nanmean([s["v_exit"] for s in m["sides"]])),
+            "early_breaks": early, "trans_by": m["by"], "resolution": m["resolution"],
+            "L_trans_plus": m["L_sides"][0], "L_trans_minus": m["L_sides"][1], "free": m["free"],
+            "L_zone": m["L_zone"], "v_exit": float(np.nanmean([s["v_exit"] for s in m["sides"]])),
             "t_trans": t_trans, "t_reflect": t_reflect, "reflection": g["reflection"], "room": g["room"],
             "uniform": m["uniform"], "nucleation_over_Lc": g["half"] / sc["L_c"], "S_path": (tp - tau) / (tau - tr),
             "Lambda": sc["Lambda"], "tau_p": tp, "tau_0": sc["tau_0"], "x_b": sc["x_b"], "D_c": sc["D_c"],
-            "D_c_eff": effective_dc(sc), "kx": sc_["interface.kx"], "ky": sc_["interface.ky"], "delta_b": sc_["interface.delta_b"],
-            "heal_time": sc_["interface.heal_time"], "zeta": sc_["time.zeta"], "damping": sc_["time.damping"],
-            "hold": sc_["drive.hold"], "bottom_kn": sc_["material.bottom_kn"], "_m": m, "_run": run}
+            "D_c_eff": effective_dc(sc), "kx": sc_["interface.kx"], "ky": sc_["interface.ky"],
+            "delta_b": sc_["interface.delta_b"], "heal_time": sc_["interface.heal_time"], "zeta": sc_["time.zeta"],
+            "damping": sc_["time.damping"], "hold": sc_["drive.hold"], "bottom_kn": sc_["material.bottom_kn"],
+            "_m": m, "_run": run}
 
 
 def rows(runs: str) -> list[dict]:
