@@ -116,13 +116,13 @@ def early_breaks(run) -> int:
     return int(len(np.unique(np.asarray(ev["site"])[brk][early])))
 
 
-def free_start(r: np.ndarray, t: np.ndarray, forced: np.ndarray, half: float,
-               min_lead: float = transition.MIN_LEAD) -> float:
+def free_start(r: np.ndarray, t: np.ndarray, forced: np.ndarray, half: float) -> float:
     """Where the rupture ran ahead of its forced nucleation (a): the first site within the zone's half-width
-    ``half`` that broke ``min_lead`` (a/c_r) or more before the forcing reached it (``forced``: the forcing's
-    arrival at each r, on the clock of ``t``); ``half`` when none did (the rupture left the zone by itself only
+    ``half`` that broke before the forcing reached it (``forced``: the forcing's arrival at each r, on the
+    clock of ``t``; the forcing then takes nucleation.duration to weaken a site, so a site broken before it
+    arrived was broken by the rupture alone); ``half`` when none did (the rupture left the zone by itself only
     at its edge).  Beyond it the rupture runs by itself: a transition there is the rupture's, not the zone's."""
-    ahead = np.flatnonzero((r < half) & (t <= forced - min_lead))
+    ahead = np.flatnonzero((r < half) & (t < forced))
     return float(r[ahead[0]]) if len(ahead) else float(half)
 
 
