@@ -22,6 +22,9 @@
 #   bash postprocess/docs_numbers.sh weakening_kammer   # the same: Kammer's speeds are measured on Andrews' runs
 #     (docs/studies/weakening.md: the sweeps run/studies/weakening_andrews*.toml, then postprocess/weakening.py
 #     andrews and kammer; one command makes both tables: 10 min on 2 ranks, 33 min when the machine is loaded)
+#   bash postprocess/docs_numbers.sh weakening_shape    # docs/studies/weakening_shape.csv and img/weakening_shape_*
+#     (docs/studies/weakening.md, study 2: the sweeps run/studies/weakening_shape*.toml, then postprocess/weakening.py
+#     shape; 9 runs: 14 min on 2 ranks while the machine was loaded, 4 min of CPU)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
