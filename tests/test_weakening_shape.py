@@ -57,8 +57,8 @@ def test_the_sweeps_hold_tau_p_gamma_lc_and_lambda_and_vary_the_share(swept):
 
 def test_the_share_is_the_laws_closed_form(swept):
     """s = x_b / (x_b + D_c) at tau_r = 0, x_b = sqrt(delta_b^2 - y^2), y = delta0 - (F_N / N) / k_y, from the
-    scene's numbers alone (not through ``law_scales``; y at the scene's k_y); the edges peak at least 2.2 times the contact's x_b,
-    with delta_b at least study 1's 1.2 a."""
+    scene's numbers alone (not through ``law_scales``; y at the scene's k_y); the edges peak at least 2.2 times
+    the contact's x_b, with delta_b at least study 1's 1.2 a."""
     for _, scene, sc in swept:
         y = scene["interface.delta0"] - scene["load.FN"] / scene["lattice.top_cols"] / scene["interface.ky"]
         xb = math.sqrt(scene["interface.delta_b"] ** 2 - y ** 2)

@@ -13,7 +13,8 @@ trade x_b (through k_x and delta_b) against D_c.  S, L_c, Lambda and L_trans are
 (``andrews.measure``), each side's arrivals up to the reflected wave or the strong edge, with one change:
 L_trans is read beyond where the rupture first ran ahead of its forced front (``free_start``), which may lie
 inside the zone, not beyond the zone's edge (study 1's reading, kept as ``L_zone``): a zone widened past where
-the rupture already runs by itself would otherwise move L_trans without changing the run.  Beside them, without a free parameter:
+the rupture already runs by itself would otherwise move L_trans without changing the run.  Beside them,
+without a free parameter:
 
     L_nuc    = 1.158 M D_c / (tau_p - tau_r)          the weakening branch's nucleation length (a; Uenishi &
                                                       Rice 2003), which sets the daughter crack's (Dunham 2007)
@@ -45,7 +46,8 @@ from . import andrews, points, provenance, sweeps, write
 UENISHI_RICE = 1.158
 
 COLS = ["sweep", "point", "S", "elastic_share", "Gamma", "L_trans", "L_c", "L_trans_over_Lc", "L_dunham",
-        "L_nuc", "early_breaks", "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "free", "L_zone", "v_exit", "t_trans", "t_reflect",
+        "L_nuc", "early_breaks", "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "free", "L_zone",
+        "v_exit", "t_trans", "t_reflect",
         "reflection", "room", "uniform", "nucleation_over_Lc", "S_path", "Lambda", "tau_p", "tau_0", "x_b", "D_c",
         "D_c_eff", "kx", "ky", "delta_b", "heal_time", "zeta", "damping", "hold", "bottom_kn"]
 
