@@ -4,7 +4,7 @@
 Drawn: where a shifted block's slabs and halos stand, and that the halos cover every position the drift box
 allows (the loop's own coverage check, at the box's corners) and no more than a link beyond it.  In
 process: the migration by global id between two placements.  On the command line: 8 ranks on slabs a few
-columns wide, with a slip of about 30 a that makes the halos follow it many times, bitwise the one-rank
+columns wide, with a slip of about 24 a that makes the halos follow it many times, bitwise the one-rank
 run; checkpointed on 8 ranks and continued on 5.
 """
 import itertools
@@ -166,10 +166,13 @@ def test_migration_by_global_id_delivers_each_rank_what_it_owns():
         assert block_columns(lat, pb, p, TOP) == b.block_columns(TOP) or p != comm.rank
 
 
-# A long slip on narrow slabs: SMALL's block (24 columns) on 80 substrate columns, driven at 0.05 c_r for
-# 20 l/c_r: it slides about 24 a, many times the skin, over slabs of 4-9 columns on 8 ranks.
-LONG = {**SMALL, "lattice.bottom_cols": 80, "drive.v0": 0.05, "drive.duration": 20.0, "output.snapshots": 4,
-        "output.buffer_frames": 16}
+# A long slip on narrow slabs: SMALL's block (24 columns) on 80 substrate columns, driven at 0.1 c_r for
+# 10 l/c_r: it slides about 24 a, many times the skin, over slabs of 4-9 columns on 8 ranks.  The load settles
+# for 1 l/c_r (SMALL's 2 would add 312 steps to every run): 3592 steps, not 7029 at 0.05 c_r for 20 l/c_r
+# (the same slip).
+LONG = {**SMALL, "lattice.bottom_cols": 80, "load.settle": 1.0, "drive.v0": 0.1, "drive.duration": 10.0,
+        "output.snapshots": 4, "output.buffer_frames": 16}
+HALF = {"drive.duration": LONG["drive.duration"] / 2, "checkpoint.every": 1.0}     # the block slid 12 a
 LIMIT_S = 300
 
 
@@ -183,6 +186,10 @@ def long_slip(tmp_path_factory):
     p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", timeout=LIMIT_S)
     assert p.returncode == 0, p.stderr
     return sc, d, datasets(out)[0]
+
+
+def _sets(over: dict) -> list[str]:
+    return [a for k, v in over.items() for a in ("--set", f"{k}={v}")]
 
 
 def _assert_same(got, ref, what, groups=("interface/", "energy/", "VTKHDF/")):
@@ -214,8 +221,8 @@ def test_a_checkpoint_of_a_slid_block_restarts_on_another_rank_count(long_slip):
     the first half's shorter duration put them)."""
     sc, d, ref = long_slip
     out = d / "r8_5.vtkhdf"
-    p = run_cli(8, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=10.0",
-                "--set", "checkpoint.every=2.0", "--watchdog", "60", timeout=LIMIT_S)
+    p = run_cli(8, "run", sc, "--out", out, "--no-png", "--quiet", *_sets(HALF), "--watchdog", "60",
+                timeout=LIMIT_S)
     assert p.returncode == 0, p.stderr[-3000:]
     p = run_cli(5, "run", sc, "--out", out, "--no-png", "--restart", f"{out}.ckpt.h5", "--watchdog", "60",
                 timeout=LIMIT_S)
@@ -229,8 +236,7 @@ def test_a_one_rank_checkpoint_of_a_slid_block_continues_on_three(long_slip):
     one-rank run bit for bit."""
     sc, d, ref = long_slip
     out = d / "r1_3.vtkhdf"
-    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", "--set", "drive.duration=10.0",
-                "--set", "checkpoint.every=2.0", timeout=LIMIT_S)
+    p = run_cli(1, "run", sc, "--out", out, "--no-png", "--quiet", *_sets(HALF), timeout=LIMIT_S)
     assert p.returncode == 0, p.stderr[-3000:]
     p = run_cli(3, "run", sc, "--out", out, "--no-png", "--restart", f"{out}.ckpt.h5", "--watchdog", "60",
                 timeout=LIMIT_S)

@@ -17,8 +17,11 @@ from parslip.errors import ConfigError
 from parslip.io import checkpoint as ck
 from parslip.io.contract import read_snapshot_arrays, read_status
 
-# SMALL with a checkpoint every 1 l/c_r (about 300 steps).
-CKPT = {"checkpoint.every": 1.0, "output.snapshots": 4}
+# SMALL with a checkpoint every 1 l/c_r (312 steps), settled for 1 l/c_r (not 2) and driven for 4 (not 6): 1718
+# steps, not 2656 (most of this file's runs are on 2 to 7 ranks, oversubscribed); bonds break from t = 1 l/c_r
+# on, before and after the half (2 l/c_r) where the tests that continue a run stop it.
+CKPT = {"checkpoint.every": 1.0, "output.snapshots": 4, "load.settle": 1.0, "drive.duration": 4.0}
+HALF = CKPT["drive.duration"] / 2
 N_NODES, N_SITES = 256, 24          # SMALL's lattice
 
 
@@ -110,13 +113,16 @@ def test_written_on_more_ranks_restarted_on_3_is_the_uninterrupted_run(tmp_path,
     # With snapshots: each writer adds them to the file the other made (an output file the gathering writer
     # made, continued by the mpio writer, once hung in the flush after the first snapshot it added).
     quiet = ("--no-png", "--quiet")
-    p = run_cli(n_first, "run", sc, "--out", out, *quiet, "--set", "drive.duration=3.0", writer=writers[0],
+    p = run_cli(n_first, "run", sc, "--out", out, *quiet, "--set", f"drive.duration={HALF}", writer=writers[0],
                 timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     with h5py.File(ckpt, "r") as f:
         assert f.attrs["n_ranks"] == n_first and f.attrs["layout"] == ("parts" if writers[0] == "gather" else "single")
         if writers[0] == "gather":
             assert len(f["parts"]) == n_first
+        step = int(f.attrs["step"])
+    broke = ref["interface/events/step"]
+    assert broke.min() < step < broke.max()             # bonds break and re-form on both sides of the restart
     p = run_cli(3, "run", sc, "--out", out, *quiet, "--restart", ckpt, writer=writers[1], timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     got, attrs = datasets(out)
@@ -129,10 +135,10 @@ def test_written_on_more_ranks_restarted_on_3_is_the_uninterrupted_run(tmp_path,
 
 
 def test_a_finished_run_extended_is_the_longer_run(tmp_path, uninterrupted):
-    """drive.duration may change on a restart: 3 l/c_r, then continued to 6, equals 6 at once
+    """drive.duration may change on a restart: 2 l/c_r, then continued to 4, equals 4 at once
     (the interface record; snapshot times depend on the duration)."""
     sc, (ref, _), _ = uninterrupted
-    assert_extension_is_the_run(sc, tmp_path / "o.vtkhdf", ref, 3.0, 2, 1)
+    assert_extension_is_the_run(sc, tmp_path / "o.vtkhdf", ref, HALF, 2, 1)
 
 
 def test_stop_after_writes_a_checkpoint_and_says_how_to_continue(tmp_path, uninterrupted):
