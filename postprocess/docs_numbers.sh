@@ -22,6 +22,9 @@
 #   bash postprocess/docs_numbers.sh weakening_kammer   # the same: Kammer's speeds are measured on Andrews' runs
 #     (docs/studies/weakening.md: the sweeps run/studies/weakening_andrews*.toml, then postprocess/weakening.py
 #     andrews and kammer; one command makes both tables: 10 min on 2 ranks, 33 min when the machine is loaded)
+#   bash postprocess/docs_numbers.sh weakening_precursors  # docs/studies/weakening_precursors.csv,
+#     weakening_precursors_arrests.csv and img/weakening_precursors_* (study 5: the sweeps
+#     run/studies/weakening_precursors*.toml, then postprocess/weakening.py precursors)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
@@ -29,7 +32,7 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer|weakening_cohesive_zone"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer|weakening_cohesive_zone|weakening_precursors"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
@@ -94,6 +97,11 @@ weakening_andrews|weakening_kammer)
     for study in andrews kammer; do
         "$PY" postprocess/weakening.py "$study" --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies"
     done ;;
+weakening_precursors)
+    for f in run/studies/weakening_precursors*.toml; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/weakening/$(basename "$f" .toml)"
+    done
+    "$PY" postprocess/weakening.py precursors --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer, weakening_cohesive_zone" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer, weakening_cohesive_zone, weakening_precursors" >&2; exit 2 ;;
 esac

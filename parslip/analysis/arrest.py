@@ -113,10 +113,12 @@ def _frame(t, time: float, after: bool) -> int:
     return min(k, len(t) - 1) if after else max(k - 1, 0)
 
 
-def arrest_prediction(run, pre) -> dict:
+def arrest_prediction(run, pre, gamma: float | None = None) -> dict:
     """The arrest fracture mechanics predicts for precursor ``pre`` (``run.precursors()``): {"L_measured",
     "L_predicted" (a), "tau_r" (rho c_r^2, the mean traction over the slipped stretch in the first frame after
-    the arrest), "Gamma" (m c_r^2 / a, the mean stored energy of its breaks, ``cracks.gamma_run``),
+    the arrest), "Gamma" (m c_r^2 / a: ``gamma`` when given, the law's fracture energy of a scene that has
+    one; else the mean stored energy of its breaks, ``cracks.gamma_run``, the energy of a bond that breaks at
+    its peak),
     "G_at_arrest_over_Gamma" (the static G at the measured length over Gamma), "from_edge" (whether it started
     within ``edge_sites`` of the contact's edge it runs away from), "geometry" ("edge": the edge crack from
     that edge; "interior": the crack from its nucleation site, module docstring)}.  NaN predictions where the
@@ -138,8 +140,9 @@ def arrest_prediction(run, pre) -> dict:
         before, after = before[depth:], after[depth:]
     n = max(int(round(L_meas)), 1)
     tau_r = float(np.mean(sign * after[:n]))
-    g = np.asarray(gamma_run(run, pre.front)["Gamma"], float)
-    gamma = float(np.nanmean(g)) if np.isfinite(g).any() else math.nan
+    if gamma is None:
+        g = np.asarray(gamma_run(run, pre.front)["Gamma"], float)
+        gamma = float(np.nanmean(g)) if np.isfinite(g).any() else math.nan
     out.update(tau_r=tau_r, Gamma=gamma)
     if not math.isfinite(gamma):
         return out

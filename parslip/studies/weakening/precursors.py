@@ -1,0 +1,186 @@
+"""Study 5 of docs/studies/weakening.md: precursors that are cracks.
+
+The loader study of docs/studies/cracks.md (section 2: the push through a soft loader at three loading heights,
+``drive.rows``) on the slip-weakening interface, whose broken sites carry Coulomb friction
+(``interface.contact_friction``) and re-form only after ``interface.heal_time``, at three normal loads, swept
+by ``run/studies/weakening_precursors*.toml``.  For every run: each arrested front (``run.precursors()``, the
+detector's patience ``cracks.precursors.PATIENCE`` a/c_r), its arrest length over the law's Lambda
+(``rupture.law_scales``: 9 pi/16 M Gamma/(tau_p - tau_r)^2 at rest under the run's F_N), F_T/F_N at its
+arrest (mu at the first frame after its tip's last advance), its mean speed, whether a P wave it sent could
+have come back to the interface off the block's far face before it stopped (its duration against 2 H/c_l, H
+the shorter block's height), and the arrest the static criterion predicts (``analysis.arrest``: the front
+stops where the static G of the crack unloaded from the traction before it to the residual after it falls to
+Gamma; Kammer et al., Tribol. Lett. 2015; Bayart et al., Nat. Phys. 2016) with Gamma the law's fracture
+energy, no parameter fitted.  Per normal load, every height together (Katano et al., Sci. Rep. 2014, Fig. 2:
+a line per F_z whatever the height and the drive speed), the straight line L/Lambda = slope * F_T/F_N +
+intercept with its r^2 (``cracks.precursors.line_fit``).
+
+Tables: ``weakening_precursors.csv`` a row per run (``F_N``, ``height``, ``n_precursors``, ``n_over_3_lambda``,
+the load's ``slope`` and ``r2``, ``median_predicted_over_measured``), ``weakening_precursors_arrests.csv`` a row
+per precursor; figures ``img/weakening_precursors_length.png`` (length against F_T/F_N, a line per F_N) and
+``img/weakening_precursors_prediction.png`` (predicted against measured arrest).  Lengths in a unless named
+over Lambda, times in l/c_r, speeds in c_r.
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from parslip.analysis import table
+from parslip.analysis.arrest import arrest_prediction
+from parslip.analysis.fronts import wave_speeds
+from parslip.model.physics import ROW_HEIGHT
+from parslip.plot.figures import pyplot, save
+
+from ..cracks.precursors import _mu_at, height_of, line_fit, max_gap
+from . import points, provenance, sweeps, write
+from .andrews import scales
+
+# The readings the runs depart from the defaults in, named as columns so that the tables declare them.
+READING_COLS = ["reform_x0", "contact", "bottom_kn", "damping", "zeta"]
+COLS = ["sweep", "point", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
+        "n_over_3_lambda", "n_before_reflection", "min_length_over_lambda", "max_length_over_lambda",
+        "median_speed", "slope", "intercept", "r2", "n_fit", "median_predicted_over_measured", "n_predicted",
+        "n_within_2", "Lambda", "tau_p", "tau_r", "Gamma", "reflection_time", "first_break", "kx", "softening",
+        "contact_friction", "heal_time"] + READING_COLS
+ARREST_COLS = ["sweep", "point", "F_N", "height", "precursor", "kind", "geometry", "nucleation_x",
+               "nucleation_time", "arrest_time", "duration", "speed", "before_reflection", "mu_arrest", "length",
+               "length_over_lambda", "predicted_over_lambda", "predicted_over_measured", "G_over_Gamma_at_arrest",
+               "tau_r_measured", "Lambda", "Gamma"]
+HEIGHT_MARKS = {"low": "o", "mid": "s", "high": "^", "face": "D"}
+WITHIN = 2.0        # the target's band: predicted within a factor 2 of measured
+
+
+def reflection_time(run) -> float:
+    """2 H / c_l (l/c_r): when a P wave sent from the interface first comes back to it off the far face of
+    the shorter block (H its height, rows * ROW_HEIGHT a; the top is loaded, the substrate's last row fixed:
+    both reflect)."""
+    s = run.scene
+    h = float(min(s["lattice.top_rows"], s["lattice.bottom_rows"])) * ROW_HEIGHT
+    return 2.0 * h / wave_speeds(run)["c_l"] / float(s["lattice.top_cols"])
+
+
+def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
+    """The run's row (without its load's fit) and a row per precursor (module docstring)."""
+    s, sc = run.scene, scales(run)
+    lam, ns, l = sc["Lambda"], len(run.x), float(s["lattice.top_cols"])
+    refl = reflection_time(run)
+    head = {"sweep": row.get("sweep", ""), "point": row["point"], "F_N": float(s["load.FN"]),
+            "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])), "scene": row["scene"],
+            "commit": row["commit"]}
+    arrests = []
+    for i, p in enumerate(run.precursors(max_gap=max_gap(run))):
+        pred = arrest_prediction(run, p, gamma=sc["Gamma"])
+        length, dur = p.arrest_length * l, p.arrest_time - p.nucleation_time
+        arrests.append({**head, "precursor": i, "kind": p.kind, "geometry": pred["geometry"],
+                        "nucleation_x": p.nucleation_x * l, "nucleation_time": p.nucleation_time,
+                        "arrest_time": p.arrest_time, "duration": dur,
+                        "speed": p.arrest_length / dur if dur > 0 else math.inf, "before_reflection": dur < refl,
+                        "mu_arrest": _mu_at(run, p.arrest_time), "length": length, "length_over_lambda": length / lam,
+                        "predicted_over_lambda": pred["L_predicted"] / lam,
+                        "predicted_over_measured": pred["L_predicted"] / length,
+                        "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r_measured": pred["tau_r"],
+                        "Lambda": lam, "Gamma": sc["Gamma"]})
+    fr = run.fronts(max_gap=max_gap(run))
+    L = [a["length_over_lambda"] for a in arrests]
+    ratio = [a["predicted_over_measured"] for a in arrests if math.isfinite(a["predicted_over_measured"])]
+    nan = math.nan
+    out = {**head, "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "n_fronts": len(fr),
+           "n_crossed": sum(f.fate == "crossed" for f in fr), "n_merged": sum(f.fate == "merged" for f in fr),
+           "n_precursors": len(arrests), "n_over_3_lambda": sum(x > 3.0 for x in L),
+           "n_before_reflection": sum(a["before_reflection"] for a in arrests),
+           "min_length_over_lambda": min(L, default=nan), "max_length_over_lambda": max(L, default=nan),
+           "median_speed": float(np.median([a["speed"] for a in arrests])) if arrests else nan,
+           "median_predicted_over_measured": float(np.median(ratio)) if ratio else nan, "n_predicted": len(ratio),
+           "n_within_2": sum(1 / WITHIN <= r <= WITHIN for r in ratio), "Lambda": lam, "tau_p": sc["tau_p"],
+           "tau_r": sc["tau_r"], "Gamma": sc["Gamma"], "reflection_time": refl,
+           "first_break": run.first_break[0], "kx": s["interface.kx"], "softening": s["interface.softening"],
+           "contact_friction": s["interface.contact_friction"], "heal_time": s["interface.heal_time"],
+           "reform_x0": s["interface.reform_x0"], "contact": s["interface.contact"],
+           "bottom_kn": s["material.bottom_kn"], "damping": s["time.damping"], "zeta": s["time.zeta"]}
+    return out, arrests
+
+
+def load_fits(arrests: list[dict]) -> dict:
+    """F_N -> ``line_fit`` of length_over_lambda against mu_arrest over that load's precursors, every height."""
+    return {fn: line_fit([a["mu_arrest"] for a in arrests if a["F_N"] == fn],
+                         [a["length_over_lambda"] for a in arrests if a["F_N"] == fn])
+            for fn in sorted({a["F_N"] for a in arrests})}
+
+
+def length_figure(arrests: list[dict], fit: dict, img: str, source: dict):
+    """Arrest length over Lambda against F_T/F_N at the arrest: a colour per normal load with its line, a marker
+    per loading height; open markers: a precursor that ran longer than the reflection time."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for k, (fn, f) in enumerate(fit.items()):
+        c = f"C{k}"
+        for h, mk in HEIGHT_MARKS.items():
+            for early in (True, False):
+                sel = [a for a in arrests if a["F_N"] == fn and a["height"] == h and a["before_reflection"] == early]
+                if sel:
+                    ax.plot([a["mu_arrest"] for a in sel], [a["length_over_lambda"] for a in sel], mk, color=c,
+                            mfc=c if early else "none", ms=4, label=f"F_N = {fn:g}, {h}" if early else None)
+        if math.isfinite(f["slope"]):
+            xs = np.array([min(a["mu_arrest"] for a in arrests if a["F_N"] == fn),
+                           max(a["mu_arrest"] for a in arrests if a["F_N"] == fn)])
+            ax.plot(xs, f["slope"] * xs + f["intercept"], "-", color=c, lw=1,
+                    label=f"F_N = {fn:g}: slope {f['slope']:.3g}, r2 {f['r2']:.2f} ({f['n_fit']})")
+    ax.axhline(3.0, color="k", ls=":", lw=0.8)
+    ax.set_xlabel("F_T / F_N at the arrest")
+    ax.set_ylabel("arrest length / Lambda")
+    ax.set_title("a line per F_N, every height (dotted: 3 Lambda; open: ran past 2H/c_l)", fontsize=8)
+    if arrests:
+        ax.legend(fontsize=6)
+    return save(fig, img, "weakening_precursors_length", source)
+
+
+def prediction_figure(arrests: list[dict], img: str, source: dict):
+    """The static criterion's arrest against the measured one (a colour per normal load), with the factor-2
+    band; the precursors whose G never reached Gamma are left out (counted in the title)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5, 4.5))
+    pts = [a for a in arrests if math.isfinite(a["predicted_over_lambda"])]
+    for k, fn in enumerate(sorted({a["F_N"] for a in arrests})):
+        for h, mk in HEIGHT_MARKS.items():
+            sel = [a for a in pts if a["F_N"] == fn and a["height"] == h]
+            if sel:
+                ax.plot([a["length_over_lambda"] for a in sel], [a["predicted_over_lambda"] for a in sel], mk,
+                        color=f"C{k}", ms=4, label=f"F_N = {fn:g}, {h}")
+    top = max([a["length_over_lambda"] for a in pts] + [a["predicted_over_lambda"] for a in pts] + [10.0])
+    xs = np.array([0.1, 2 * top])
+    ax.plot(xs, xs, "k-", lw=0.6)
+    for f in (WITHIN, 1 / WITHIN):
+        ax.plot(xs, f * xs, "k:", lw=0.6)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("measured arrest length / Lambda")
+    ax.set_ylabel("predicted (static G falls to Gamma) / Lambda")
+    ax.set_title(f"{len(pts)} of {len(arrests)} precursors reach G = Gamma (dotted: factor 2)", fontsize=8)
+    if pts:
+        ax.legend(fontsize=6)
+    return save(fig, img, "weakening_precursors_prediction", source)
+
+
+def tabulate(runs: str, img: str, tables: str) -> str:
+    """Both tables and both figures (module docstring); returns the Markdown of the runs' table."""
+    rows, arrests = [], []
+    for d in sweeps(runs, "precursors"):
+        for row, run in points(d):
+            if run is None:
+                continue
+            r, a = run_arrests({**row, "sweep": os.path.basename(d)}, run)
+            rows.append(r)
+            arrests += a
+    fit = load_fits(arrests)
+    nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
+    for r in rows:
+        r.update(fit.get(r["F_N"], nan))
+    table.write_csv(os.path.join(tables, "weakening_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
+                    arrests)
+    source = provenance(rows)
+    length_figure(arrests, fit, img, source)
+    prediction_figure(arrests, img, source)
+    return write(rows, COLS, os.path.join(tables, "weakening_precursors.csv"))
