@@ -29,15 +29,17 @@ def _drawn(lines):
     rows = []
     for fn, slope, icpt in lines:
         for h, mus in (("low", (0.2, 0.5)), ("mid", (0.3, 0.6)), ("high", (0.4, 0.7))):
-            rows += [{"F_N": fn, "height": h, "mu_arrest": mu, "length_over_lambda": slope * mu + icpt} for mu in mus]
+            rows += [{"F_N": fn, "block_rows": 100, "height": h, "mu_arrest": mu, "length_over_lambda": slope * mu + icpt}
+                     for mu in mus]
     return rows
 
 
 def test_one_line_per_normal_load_through_every_height():
     rows = _drawn(((10.0, 20.0, -1.0), (40.0, 5.0, 2.0)))
     fit = wp.load_fits(rows)
-    assert sorted(fit) == [10.0, 40.0]
+    assert sorted(fit) == [(10.0, 100), (40.0, 100)]
     for fn, slope, icpt in ((10.0, 20.0, -1.0), (40.0, 5.0, 2.0)):
+        fn = (fn, 100)
         assert fit[fn]["slope"] == pytest.approx(slope) and fit[fn]["intercept"] == pytest.approx(icpt)
         assert fit[fn]["r2"] == pytest.approx(1.0) and fit[fn]["n_fit"] == 6
     pooled = wp.line_fit([a["mu_arrest"] for a in rows], [a["length_over_lambda"] for a in rows])
@@ -78,3 +80,35 @@ def test_the_reflection_time_is_the_p_waves_round_trip_through_the_shorter_block
     run = Run.from_arrays({"t": np.zeros(1), "x": np.zeros(1)}, scene, {"c_r": 1.0, "c_s": 1.1, "c_l": 1.8})
     assert wp.reflection_time(run) == pytest.approx(2 * 100 * ROW_HEIGHT / 1.8 / 500)
     assert math.isclose(wp.reflection_time(run) * 500, 96.225, rel_tol=1e-4)
+
+
+def test_bursts_split_where_the_breaks_pause_longer_than_the_gap():
+    t = np.array([0.0, 0.1, 0.2, 1.0, 1.05, 3.0])
+    got = arrest.break_bursts(t, np.zeros(6, int), 0.5)
+    assert [list(b) for b in got] == [[0, 1, 2], [3, 4], [5]]
+    assert arrest.break_bursts(np.zeros(0), np.zeros(0, int), 0.5) == []
+
+
+def test_edge_cracks_keep_a_crack_whole_through_the_sites_still_broken():
+    """Drawn breaks on 200 sites: a crack from the pushed edge breaks sites 0-39, pauses, then a second one runs
+    through sites 0-19 (still broken: no breaks there) and breaks 20-79 and, after a stretch of 20 sites it
+    runs through without a break (quicker than the gap), 100-119; a 3-break burst; then one that crosses to the
+    far edge; a break during the settle (t < 0) is left out."""
+    n = 200
+    seg = lambda lo, hi, t0, v: (t0 + (np.arange(lo, hi) - lo) / (v * n), np.arange(lo, hi))
+    parts = [(np.array([-0.5]), np.array([7])), seg(0, 40, 1.0, 0.5), seg(20, 80, 3.0, 0.5),
+             seg(100, 120, 3.0 + 80 / (0.5 * n), 0.5), (np.array([5.0, 5.01, 5.02]), np.array([3, 4, 5])),
+             seg(0, n, 7.0, 0.5)]
+    t = np.concatenate([p[0] for p in parts])
+    site = np.concatenate([p[1] for p in parts])
+    events = {"time": t, "site": site, "kind": np.ones(len(t), int)}
+    run = Run.from_arrays({"t": np.array([0.0]), "x": (np.arange(n) + 0.5) / n, "events": events})
+    got = arrest.edge_cracks(run, gap=0.25, min_breaks=10)
+    assert [c.arrested for c in got] == [True, True, False]
+    a, b, c = got
+    assert a.arrest_length * n == 40 and a.breaks == 40 and a.span == 40 and a.first_x == pytest.approx(0.5 / n)
+    assert b.arrest_length * n == 120 and b.breaks == 80 and b.span == 100 and b.first_x == pytest.approx(20.5 / n)
+    assert b.nucleation_x == pytest.approx(0.5 / n) and b.front.direction == 1
+    assert b.arrest_time == pytest.approx(3.0 + 80 / (0.5 * n) + 19 / (0.5 * n))
+    back = arrest.edge_cracks(run, gap=0.25, min_breaks=10, direction=-1)    # seen from the other edge
+    assert back[0].arrest_length * n == 200 and not back[0].arrested and back[0].nucleation_x == pytest.approx(1 - 0.5 / n)

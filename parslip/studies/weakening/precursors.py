@@ -3,16 +3,21 @@
 The loader study of docs/studies/cracks.md (section 2: the push through a soft loader at three loading heights,
 ``drive.rows``) on the slip-weakening interface, whose broken sites carry Coulomb friction
 (``interface.contact_friction``) and re-form only after ``interface.heal_time``, at three normal loads, swept
-by ``run/studies/weakening_precursors*.toml``.  For every run: each arrested front (``run.precursors()``, the
-detector's patience ``cracks.precursors.PATIENCE`` a/c_r), its arrest length over the law's Lambda
-(``rupture.law_scales``: 9 pi/16 M Gamma/(tau_p - tau_r)^2 at rest under the run's F_N), F_T/F_N at its
-arrest (mu at the first frame after its tip's last advance), its mean speed, whether a P wave it sent could
-have come back to the interface off the block's far face before it stopped (its duration against 2 H/c_l, H
-the shorter block's height), and the arrest the static criterion predicts (``analysis.arrest``: the front
-stops where the static G of the crack unloaded from the traction before it to the residual after it falls to
-Gamma; Kammer et al., Tribol. Lett. 2015; Bayart et al., Nat. Phys. 2016) with Gamma the law's fracture
-energy, no parameter fitted.  Per normal load, every height together (Katano et al., Sci. Rep. 2014, Fig. 2:
-a line per F_z whatever the height and the drive speed), the straight line L/Lambda = slope * F_T/F_N +
+by ``run/studies/weakening_precursors*.toml``.  A precursor is a burst of breaks that grew the slipped region
+from the loaded edge and stopped inside the contact before the first burst that reached the far edge (the
+contact's first slip whole, ``t_slip``; ``analysis.arrest.edge_cracks``: breaks no more than ``GAP`` a/c_r
+apart, at least Lambda of them): behind its tip the sites stay broken, slipping at the residual,
+so the catalogue of fronts would cut it where it runs through them.  For every run: each precursor's length
+from the loaded edge over the law's Lambda (``rupture.law_scales``: 9 pi/16 M Gamma/(tau_p - tau_r)^2 at rest
+under the run's F_N), F_T/F_N at its arrest (mu at the first frame after its last break), its speed (the sites
+it spans over its duration), whether a P wave it sent could have come back to the interface off the block's
+far face before it stopped (its duration against 2 H/c_l, H the shorter block's height), and the arrest the
+static criterion predicts (``analysis.arrest.arrest_prediction``: the edge crack unloaded from the traction
+before its first break to the residual after its last stops where its static G falls to Gamma; Kammer et al.,
+Tribol. Lett. 2015; Bayart et al., Nat. Phys. 2016) with Gamma the law's fracture energy, no parameter
+fitted.  Per normal load and block height (``block_rows``: the main sweep's and the
+tall control's apart), every loading height together (Katano et al., Sci. Rep. 2014, Fig. 2: a line per F_z
+whatever the height and the drive speed), the straight line L/Lambda = slope * F_T/F_N +
 intercept with its r^2 (``cracks.precursors.line_fit``).
 
 Tables: ``weakening_precursors.csv`` a row per run (``F_N``, ``height``, ``n_precursors``, ``n_over_3_lambda``,
@@ -29,28 +34,32 @@ import os
 import numpy as np
 
 from parslip.analysis import table
-from parslip.analysis.arrest import arrest_prediction
+from parslip.analysis.arrest import arrest_prediction, edge_cracks
 from parslip.analysis.fronts import wave_speeds
 from parslip.model.physics import ROW_HEIGHT
 from parslip.plot.figures import pyplot, save
 
-from ..cracks.precursors import _mu_at, height_of, line_fit, max_gap
+from ..cracks.precursors import _mu_at, height_of, line_fit
 from . import points, provenance, sweeps, write
 from .andrews import scales
 
 # The readings the runs depart from the defaults in, named as columns so that the tables declare them.
 READING_COLS = ["reform_x0", "contact", "bottom_kn", "damping", "zeta"]
-COLS = ["sweep", "point", "F_N", "height", "rows", "n_fronts", "n_crossed", "n_merged", "n_precursors",
+COLS = ["sweep", "point", "F_N", "height", "block_rows", "rows", "n_bursts", "n_crossed", "t_slip", "n_precursors",
         "n_over_3_lambda", "n_before_reflection", "min_length_over_lambda", "max_length_over_lambda",
         "median_speed", "slope", "intercept", "r2", "n_fit", "median_predicted_over_measured", "n_predicted",
         "n_within_2", "Lambda", "tau_p", "tau_r", "Gamma", "reflection_time", "first_break", "kx", "softening",
         "contact_friction", "heal_time"] + READING_COLS
-ARREST_COLS = ["sweep", "point", "F_N", "height", "precursor", "kind", "geometry", "nucleation_x",
-               "nucleation_time", "arrest_time", "duration", "speed", "before_reflection", "mu_arrest", "length",
+ARREST_COLS = ["sweep", "point", "F_N", "height", "block_rows", "precursor", "first_x", "nucleation_time", "arrest_time",
+               "duration", "breaks", "span", "speed", "before_reflection", "mu_arrest", "length",
                "length_over_lambda", "predicted_over_lambda", "predicted_over_measured", "G_over_Gamma_at_arrest",
                "tau_r_measured", "Lambda", "Gamma"]
 HEIGHT_MARKS = {"low": "o", "mid": "s", "high": "^", "face": "D"}
 WITHIN = 2.0        # the target's band: predicted within a factor 2 of measured
+# The longest quiet time inside one precursor (a/c_r): a tip at 0.02 c_r breaks a site every 50 a/c_r, and one
+# at 0.4 c_r crosses 20 sites that have not re-formed (no break there) in 50 a/c_r; half the delay
+# (heal_time = 100 a/c_r), so that a stretch a precursor broke has not re-formed when the next burst starts.
+GAP = 50.0
 
 
 def reflection_time(run) -> float:
@@ -68,28 +77,29 @@ def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
     lam, ns, l = sc["Lambda"], len(run.x), float(s["lattice.top_cols"])
     refl = reflection_time(run)
     head = {"sweep": row.get("sweep", ""), "point": row["point"], "F_N": float(s["load.FN"]),
-            "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])), "scene": row["scene"],
-            "commit": row["commit"]}
+            "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])), "block_rows": int(s["lattice.top_rows"]),
+            "scene": row["scene"], "commit": row["commit"]}
+    bursts = edge_cracks(run, GAP / l, max(int(round(lam)), 1))
+    # Precursors come before the contact first slips whole: the first burst that reached the far edge.
+    t_slip = min((c.nucleation_time for c in bursts if not c.arrested), default=math.inf)
     arrests = []
-    for i, p in enumerate(run.precursors(max_gap=max_gap(run))):
+    for i, p in enumerate(c for c in bursts if c.arrested and c.arrest_time < t_slip):
         pred = arrest_prediction(run, p, gamma=sc["Gamma"])
         length, dur = p.arrest_length * l, p.arrest_time - p.nucleation_time
-        arrests.append({**head, "precursor": i, "kind": p.kind, "geometry": pred["geometry"],
-                        "nucleation_x": p.nucleation_x * l, "nucleation_time": p.nucleation_time,
-                        "arrest_time": p.arrest_time, "duration": dur,
-                        "speed": p.arrest_length / dur if dur > 0 else math.inf, "before_reflection": dur < refl,
+        arrests.append({**head, "precursor": i, "first_x": p.first_x * l, "nucleation_time": p.nucleation_time,
+                        "arrest_time": p.arrest_time, "duration": dur, "breaks": p.breaks, "span": p.span,
+                        "speed": p.span / (dur * l) if dur > 0 else math.inf, "before_reflection": dur < refl,
                         "mu_arrest": _mu_at(run, p.arrest_time), "length": length, "length_over_lambda": length / lam,
                         "predicted_over_lambda": pred["L_predicted"] / lam,
                         "predicted_over_measured": pred["L_predicted"] / length,
                         "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r_measured": pred["tau_r"],
                         "Lambda": lam, "Gamma": sc["Gamma"]})
-    fr = run.fronts(max_gap=max_gap(run))
     L = [a["length_over_lambda"] for a in arrests]
     ratio = [a["predicted_over_measured"] for a in arrests if math.isfinite(a["predicted_over_measured"])]
     nan = math.nan
-    out = {**head, "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "n_fronts": len(fr),
-           "n_crossed": sum(f.fate == "crossed" for f in fr), "n_merged": sum(f.fate == "merged" for f in fr),
-           "n_precursors": len(arrests), "n_over_3_lambda": sum(x > 3.0 for x in L),
+    out = {**head, "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "n_bursts": len(bursts),
+           "n_crossed": sum(not c.arrested for c in bursts), "t_slip": t_slip, "n_precursors": len(arrests),
+           "n_over_3_lambda": sum(x > 3.0 for x in L),
            "n_before_reflection": sum(a["before_reflection"] for a in arrests),
            "min_length_over_lambda": min(L, default=nan), "max_length_over_lambda": max(L, default=nan),
            "median_speed": float(np.median([a["speed"] for a in arrests])) if arrests else nan,
@@ -103,11 +113,16 @@ def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
     return out, arrests
 
 
+def group(a: dict) -> tuple:
+    """What one line spans: a normal load on one block height (``block_rows``), every loading height."""
+    return a["F_N"], a["block_rows"]
+
+
 def load_fits(arrests: list[dict]) -> dict:
-    """F_N -> ``line_fit`` of length_over_lambda against mu_arrest over that load's precursors, every height."""
-    return {fn: line_fit([a["mu_arrest"] for a in arrests if a["F_N"] == fn],
-                         [a["length_over_lambda"] for a in arrests if a["F_N"] == fn])
-            for fn in sorted({a["F_N"] for a in arrests})}
+    """``group`` -> ``line_fit`` of length_over_lambda against mu_arrest over its precursors, every height."""
+    return {k: line_fit([a["mu_arrest"] for a in arrests if group(a) == k],
+                        [a["length_over_lambda"] for a in arrests if group(a) == k])
+            for k in sorted({group(a) for a in arrests})}
 
 
 def length_figure(arrests: list[dict], fit: dict, img: str, source: dict):
@@ -115,19 +130,19 @@ def length_figure(arrests: list[dict], fit: dict, img: str, source: dict):
     per loading height; open markers: a precursor that ran longer than the reflection time."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    for k, (fn, f) in enumerate(fit.items()):
-        c = f"C{k}"
+    for k, (key, f) in enumerate(fit.items()):
+        c, mine = f"C{k}", [a for a in arrests if group(a) == key]
+        name = f"F_N = {key[0]:g}, {key[1]} rows"
         for h, mk in HEIGHT_MARKS.items():
             for early in (True, False):
-                sel = [a for a in arrests if a["F_N"] == fn and a["height"] == h and a["before_reflection"] == early]
+                sel = [a for a in mine if a["height"] == h and a["before_reflection"] == early]
                 if sel:
                     ax.plot([a["mu_arrest"] for a in sel], [a["length_over_lambda"] for a in sel], mk, color=c,
-                            mfc=c if early else "none", ms=4, label=f"F_N = {fn:g}, {h}" if early else None)
+                            mfc=c if early else "none", ms=4, label=f"{name}, {h}" if early else None)
         if math.isfinite(f["slope"]):
-            xs = np.array([min(a["mu_arrest"] for a in arrests if a["F_N"] == fn),
-                           max(a["mu_arrest"] for a in arrests if a["F_N"] == fn)])
+            xs = np.array([min(a["mu_arrest"] for a in mine), max(a["mu_arrest"] for a in mine)])
             ax.plot(xs, f["slope"] * xs + f["intercept"], "-", color=c, lw=1,
-                    label=f"F_N = {fn:g}: slope {f['slope']:.3g}, r2 {f['r2']:.2f} ({f['n_fit']})")
+                    label=f"{name}: slope {f['slope']:.3g}, r2 {f['r2']:.2f} ({f['n_fit']})")
     ax.axhline(3.0, color="k", ls=":", lw=0.8)
     ax.set_xlabel("F_T / F_N at the arrest")
     ax.set_ylabel("arrest length / Lambda")
@@ -143,12 +158,12 @@ def prediction_figure(arrests: list[dict], img: str, source: dict):
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 4.5))
     pts = [a for a in arrests if math.isfinite(a["predicted_over_lambda"])]
-    for k, fn in enumerate(sorted({a["F_N"] for a in arrests})):
+    for k, key in enumerate(sorted({group(a) for a in arrests})):
         for h, mk in HEIGHT_MARKS.items():
-            sel = [a for a in pts if a["F_N"] == fn and a["height"] == h]
+            sel = [a for a in pts if group(a) == key and a["height"] == h]
             if sel:
                 ax.plot([a["length_over_lambda"] for a in sel], [a["predicted_over_lambda"] for a in sel], mk,
-                        color=f"C{k}", ms=4, label=f"F_N = {fn:g}, {h}")
+                        color=f"C{k}", ms=4, label=f"F_N = {key[0]:g}, {key[1]} rows, {h}")
     top = max([a["length_over_lambda"] for a in pts] + [a["predicted_over_lambda"] for a in pts] + [10.0])
     xs = np.array([0.1, 2 * top])
     ax.plot(xs, xs, "k-", lw=0.6)
@@ -177,7 +192,7 @@ def tabulate(runs: str, img: str, tables: str) -> str:
     fit = load_fits(arrests)
     nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
     for r in rows:
-        r.update(fit.get(r["F_N"], nan))
+        r.update(fit.get(group(r), nan))
     table.write_csv(os.path.join(tables, "weakening_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
                     arrests)
     source = provenance(rows)
