@@ -29,8 +29,8 @@ def _drawn(lines):
     rows = []
     for fn, slope, icpt in lines:
         for h, mus in (("low", (0.2, 0.5)), ("mid", (0.3, 0.6)), ("high", (0.4, 0.7))):
-            rows += [{"F_N": fn, "block_rows": 100, "height": h, "mu_arrest": mu, "length_over_lambda": slope * mu + icpt}
-                     for mu in mus]
+            rows += [{"F_N": fn, "block_rows": 100, "height": h, "mu_arrest": mu,
+                      "length_over_lambda": slope * mu + icpt} for mu in mus]
     return rows
 
 
@@ -111,4 +111,5 @@ def test_edge_cracks_keep_a_crack_whole_through_the_sites_still_broken():
     assert b.nucleation_x == pytest.approx(0.5 / n) and b.front.direction == 1
     assert b.arrest_time == pytest.approx(3.0 + 80 / (0.5 * n) + 19 / (0.5 * n))
     back = arrest.edge_cracks(run, gap=0.25, min_breaks=10, direction=-1)    # seen from the other edge
-    assert back[0].arrest_length * n == 200 and not back[0].arrested and back[0].nucleation_x == pytest.approx(1 - 0.5 / n)
+    assert back[0].arrest_length * n == 200 and not back[0].arrested
+    assert back[0].nucleation_x == pytest.approx(1 - 0.5 / n)

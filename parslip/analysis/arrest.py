@@ -212,9 +212,9 @@ def edge_cracks(run, gap: float, min_breaks: int, direction: int = 1) -> list[Ed
     for idx in break_bursts(t, site, gap):
         if len(idx) < min_breaks:
             continue
-        far = int(depth[idx].max())
+        far, tip = int(depth[idx].max()), int(site[idx][np.argmax(depth[idx])])
         out.append(EdgeCrack(nucleation_time=float(t[idx[0]]), arrest_time=float(t[idx[-1]]), nucleation_x=edge_x,
-                             first_x=float(run.x[site[idx[0]]]), arrest_x=float(run.x[site[idx][np.argmax(depth[idx])]]),
+                             first_x=float(run.x[site[idx[0]]]), arrest_x=float(run.x[tip]),
                              arrest_length=(far + 1) / ns, span=int(far - depth[idx].min() + 1), breaks=len(idx),
                              arrested=far < ns - 1 - edge_sites(ns), direction=direction))
     return out

@@ -39,19 +39,20 @@ from parslip.analysis.fronts import wave_speeds
 from parslip.model.physics import ROW_HEIGHT
 from parslip.plot.figures import pyplot, save
 
-from ..cracks.precursors import _mu_at, height_of, line_fit
+from ..cracks.precursors import _mu_at, height_of, line_fit, max_gap
 from . import points, provenance, sweeps, write
 from .andrews import scales
 
 # The readings the runs depart from the defaults in, named as columns so that the tables declare them.
 READING_COLS = ["reform_x0", "contact", "bottom_kn", "damping", "zeta"]
 COLS = ["sweep", "point", "F_N", "height", "block_rows", "rows", "n_bursts", "n_crossed", "t_slip", "n_precursors",
-        "n_over_3_lambda", "n_before_reflection", "min_length_over_lambda", "max_length_over_lambda",
+        "n_over_3_lambda", "n_before_reflection", "catalogue_arrested", "catalogue_max_over_lambda",
+        "min_length_over_lambda", "max_length_over_lambda",
         "median_speed", "slope", "intercept", "r2", "n_fit", "median_predicted_over_measured", "n_predicted",
         "n_within_2", "Lambda", "tau_p", "tau_r", "Gamma", "reflection_time", "first_break", "kx", "softening",
         "contact_friction", "heal_time"] + READING_COLS
-ARREST_COLS = ["sweep", "point", "F_N", "height", "block_rows", "precursor", "first_x", "nucleation_time", "arrest_time",
-               "duration", "breaks", "span", "speed", "before_reflection", "mu_arrest", "length",
+ARREST_COLS = ["sweep", "point", "F_N", "height", "block_rows", "precursor", "first_x", "nucleation_time",
+               "arrest_time", "duration", "breaks", "span", "speed", "before_reflection", "mu_arrest", "length",
                "length_over_lambda", "predicted_over_lambda", "predicted_over_measured", "G_over_Gamma_at_arrest",
                "tau_r_measured", "Lambda", "Gamma"]
 HEIGHT_MARKS = {"low": "o", "mid": "s", "high": "^", "face": "D"}
@@ -94,11 +95,15 @@ def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
                         "predicted_over_measured": pred["L_predicted"] / length,
                         "G_over_Gamma_at_arrest": pred["G_at_arrest_over_Gamma"], "tau_r_measured": pred["tau_r"],
                         "Lambda": lam, "Gamma": sc["Gamma"]})
+    # The catalogue of fronts on the same run, as the loader study of docs/studies/cracks.md counts precursors.
+    cat = [p for p in run.precursors(max_gap=max_gap(run)) if p.arrest_time < t_slip]
     L = [a["length_over_lambda"] for a in arrests]
     ratio = [a["predicted_over_measured"] for a in arrests if math.isfinite(a["predicted_over_measured"])]
     nan = math.nan
     out = {**head, "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "n_bursts": len(bursts),
            "n_crossed": sum(not c.arrested for c in bursts), "t_slip": t_slip, "n_precursors": len(arrests),
+           "catalogue_arrested": len(cat),
+           "catalogue_max_over_lambda": max((p.arrest_length * l / lam for p in cat), default=nan),
            "n_over_3_lambda": sum(x > 3.0 for x in L),
            "n_before_reflection": sum(a["before_reflection"] for a in arrests),
            "min_length_over_lambda": min(L, default=nan), "max_length_over_lambda": max(L, default=nan),
