@@ -18,7 +18,8 @@ Tribol. Lett. 2015; Bayart et al., Nat. Phys. 2016) with Gamma the law's fractur
 fitted.  Per normal load and block height (``block_rows``: the main sweep's and the
 tall control's apart), every loading height together (Katano et al., Sci. Rep. 2014, Fig. 2: a line per F_z
 whatever the height and the drive speed), the straight line L/Lambda = slope * F_T/F_N +
-intercept with its r^2 (``cracks.precursors.line_fit``).
+intercept with its r^2 (``cracks.precursors.line_fit``); beside it each run's own line (``run_slope``,
+``run_r2``: one loading height, as Rubinstein et al.'s Fig. 3 draws one loading configuration).
 
 Tables: ``weakening_precursors.csv`` a row per run (``F_N``, ``height``, ``n_precursors``, ``n_over_3_lambda``,
 the load's ``slope`` and ``r2``, ``median_predicted_over_measured``), ``weakening_precursors_arrests.csv`` a row
@@ -48,7 +49,8 @@ READING_COLS = ["reform_x0", "contact", "bottom_kn", "damping", "zeta"]
 COLS = ["sweep", "point", "F_N", "height", "block_rows", "rows", "n_bursts", "n_crossed", "t_slip", "n_precursors",
         "n_over_3_lambda", "n_before_reflection", "catalogue_arrested", "catalogue_max_over_lambda",
         "min_length_over_lambda", "max_length_over_lambda",
-        "median_speed", "slope", "intercept", "r2", "n_fit", "median_predicted_over_measured", "n_predicted",
+        "median_speed", "slope", "intercept", "r2", "n_fit", "run_slope", "run_r2", "median_predicted_over_measured",
+        "n_predicted",
         "n_within_2", "Lambda", "tau_p", "tau_r", "Gamma", "reflection_time", "first_break", "kx", "softening",
         "contact_friction", "heal_time"] + READING_COLS
 ARREST_COLS = ["sweep", "point", "F_N", "height", "block_rows", "precursor", "first_x", "nucleation_time",
@@ -139,11 +141,13 @@ def length_figure(arrests: list[dict], fit: dict, img: str, source: dict):
         c, mine = f"C{k}", [a for a in arrests if group(a) == key]
         name = f"F_N = {key[0]:g}, {key[1]} rows"
         for h, mk in HEIGHT_MARKS.items():
+            label = f"{name}, {h}"
             for early in (True, False):
                 sel = [a for a in mine if a["height"] == h and a["before_reflection"] == early]
                 if sel:
                     ax.plot([a["mu_arrest"] for a in sel], [a["length_over_lambda"] for a in sel], mk, color=c,
-                            mfc=c if early else "none", ms=4, label=f"{name}, {h}" if early else None)
+                            mfc=c if early else "none", ms=4, label=label)
+                    label = None                    # one legend entry per height, filled or open
         if math.isfinite(f["slope"]):
             xs = np.array([min(a["mu_arrest"] for a in mine), max(a["mu_arrest"] for a in mine)])
             ax.plot(xs, f["slope"] * xs + f["intercept"], "-", color=c, lw=1,
@@ -198,6 +202,10 @@ def tabulate(runs: str, img: str, tables: str) -> str:
     nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
     for r in rows:
         r.update(fit.get(group(r), nan))
+        own = [a for a in arrests if (a["sweep"], a["point"]) == (r["sweep"], r["point"])]
+        r.update({f"run_{k}": v for k, v in line_fit([a["mu_arrest"] for a in own],
+                                                     [a["length_over_lambda"] for a in own]).items()
+                  if k in ("slope", "r2")})
     table.write_csv(os.path.join(tables, "weakening_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
                     arrests)
     source = provenance(rows)
