@@ -52,7 +52,7 @@ COLS = ["sweep", "point", "F_N", "height", "block_rows", "rows", "n_bursts", "n_
         "median_speed", "slope", "intercept", "r2", "n_fit", "run_slope", "run_r2", "median_predicted_over_measured",
         "n_predicted",
         "n_within_2", "Lambda", "tau_p", "tau_r", "Gamma", "reflection_time", "first_break", "kx", "softening",
-        "contact_friction", "heal_time"] + READING_COLS
+        "contact_friction", "heal_time", "record_end", "status"] + READING_COLS
 ARREST_COLS = ["sweep", "point", "F_N", "height", "block_rows", "precursor", "first_x", "nucleation_time",
                "arrest_time", "duration", "breaks", "span", "speed", "before_reflection", "mu_arrest", "length",
                "length_over_lambda", "predicted_over_lambda", "predicted_over_measured", "G_over_Gamma_at_arrest",
@@ -102,7 +102,9 @@ def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
     L = [a["length_over_lambda"] for a in arrests]
     ratio = [a["predicted_over_measured"] for a in arrests if math.isfinite(a["predicted_over_measured"])]
     nan = math.nan
+    status = str(run.attrs.get("status", ""))
     out = {**head, "rows": "-".join(str(r) for r in s["drive.rows"]) or "all", "n_bursts": len(bursts),
+           "record_end": float(run.times[-1]), "status": status.split(":")[0],
            "n_crossed": sum(not c.arrested for c in bursts), "t_slip": t_slip, "n_precursors": len(arrests),
            "catalogue_arrested": len(cat),
            "catalogue_max_over_lambda": max((p.arrest_length * l / lam for p in cat), default=nan),
