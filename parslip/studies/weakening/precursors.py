@@ -56,7 +56,7 @@ COLS = ["sweep", "point", "F_N", "height", "block_rows", "rows", "n_bursts", "n_
 ARREST_COLS = ["sweep", "point", "F_N", "height", "block_rows", "precursor", "first_x", "nucleation_time",
                "arrest_time", "duration", "breaks", "span", "speed", "before_reflection", "mu_arrest", "length",
                "length_over_lambda", "predicted_over_lambda", "predicted_over_measured", "G_over_Gamma_at_arrest",
-               "tau_r_measured", "Lambda", "Gamma"]
+               "tau_r_measured", "Lambda", "Gamma"] + READING_COLS
 HEIGHT_MARKS = {"low": "o", "mid": "s", "high": "^", "face": "D"}
 WITHIN = 2.0        # the target's band: predicted within a factor 2 of measured
 # The longest quiet time inside one precursor (a/c_r): a tip at 0.02 c_r breaks a site every 50 a/c_r, and one
@@ -81,7 +81,9 @@ def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
     refl = reflection_time(run)
     head = {"sweep": row.get("sweep", ""), "point": row["point"], "F_N": float(s["load.FN"]),
             "height": height_of(s["drive.rows"], int(s["lattice.top_rows"])), "block_rows": int(s["lattice.top_rows"]),
-            "scene": row["scene"], "commit": row["commit"]}
+            "scene": row["scene"], "commit": row["commit"], "reform_x0": s["interface.reform_x0"],
+            "contact": s["interface.contact"], "bottom_kn": s["material.bottom_kn"], "damping": s["time.damping"],
+            "zeta": s["time.zeta"]}
     bursts = edge_cracks(run, GAP / l, max(int(round(lam)), 1))
     # Precursors come before the contact first slips whole: the first burst that reached the far edge.
     t_slip = min((c.nucleation_time for c in bursts if not c.arrested), default=math.inf)
@@ -116,9 +118,7 @@ def run_arrests(row: dict, run) -> tuple[dict, list[dict]]:
            "n_within_2": sum(1 / WITHIN <= r <= WITHIN for r in ratio), "Lambda": lam, "tau_p": sc["tau_p"],
            "tau_r": sc["tau_r"], "Gamma": sc["Gamma"], "reflection_time": refl,
            "first_break": run.first_break[0], "kx": s["interface.kx"], "softening": s["interface.softening"],
-           "contact_friction": s["interface.contact_friction"], "heal_time": s["interface.heal_time"],
-           "reform_x0": s["interface.reform_x0"], "contact": s["interface.contact"],
-           "bottom_kn": s["material.bottom_kn"], "damping": s["time.damping"], "zeta": s["time.zeta"]}
+           "contact_friction": s["interface.contact_friction"], "heal_time": s["interface.heal_time"]}
     return out, arrests
 
 
