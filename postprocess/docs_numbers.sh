@@ -24,7 +24,8 @@
 #     andrews and kammer; one command makes both tables: 10 min on 2 ranks, 33 min when the machine is loaded)
 #   bash postprocess/docs_numbers.sh weakening_precursors  # docs/studies/weakening_precursors.csv,
 #     weakening_precursors_arrests.csv and img/weakening_precursors_* (study 5: the sweeps
-#     run/studies/weakening_precursors*.toml, then postprocess/weakening.py precursors)
+#     run/studies/weakening_precursors*.toml, then postprocess/weakening.py precursors: 7.4 min of CPU, 31 min
+#     of wall time on 2 cores loaded by other jobs)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
