@@ -25,6 +25,10 @@
 #   bash postprocess/docs_numbers.sh weakening_shape    # docs/studies/weakening_shape.csv and img/weakening_shape_*
 #     (docs/studies/weakening.md, study 2: the sweeps run/studies/weakening_shape*.toml, then postprocess/weakening.py
 #     shape; 9 runs: 14 min on 2 ranks while the machine was loaded, 4 min of CPU)
+#   bash postprocess/docs_numbers.sh weakening_precursors  # docs/studies/weakening_precursors.csv,
+#     weakening_precursors_arrests.csv and img/weakening_precursors_* (study 5: the sweeps
+#     run/studies/weakening_precursors*.toml, then postprocess/weakening.py precursors: 7.4 min of CPU, 31 min
+#     of wall time on 2 cores loaded by other jobs)
 #
 # OUT (default out/docs) keeps the runs; DOCS (default docs) is where the tables and figures go: point it
 # outside the checkout to keep the checkout clean while several pages run, and copy them in afterwards.
@@ -32,7 +36,7 @@
 # left in OUT) for the page to be rewritten from.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer|weakening_cohesive_zone|weakening_shape"}
+what=${1:?"usage: $0 accuracy|friction|paper|scaling|interfaces|cracks_energy|cracks_precursors|cracks_supershear|cracks_healing|weakening_andrews|weakening_kammer|weakening_cohesive_zone|weakening_shape|weakening_precursors"}
 OUT=${OUT:-out/docs}
 DOCS=${DOCS:-docs}
 NP=${NP:-2}
@@ -102,6 +106,11 @@ weakening_shape)
         "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/weakening/$(basename "$f" .toml)"
     done
     "$PY" postprocess/weakening.py shape --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
+weakening_precursors)
+    for f in run/studies/weakening_precursors*.toml; do
+        "$MPIEXEC" -n "$NP" "$PY" -m parslip sweep "$f" -o "$OUT/weakening/$(basename "$f" .toml)"
+    done
+    "$PY" postprocess/weakening.py precursors --dir "$OUT/weakening" -o "$DOCS/studies/img" --tables "$DOCS/studies" ;;
 *)
-    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer, weakening_cohesive_zone, weakening_shape" >&2; exit 2 ;;
+    echo "docs_numbers.sh: $what: accepted: accuracy, friction, paper, scaling, interfaces, cracks_energy, cracks_precursors, cracks_supershear, cracks_healing, weakening_andrews, weakening_kammer, weakening_cohesive_zone, weakening_shape, weakening_precursors" >&2; exit 2 ;;
 esac

@@ -34,7 +34,9 @@ bending adds to it), so there the prediction is short of a lattice that follows 
   interior_k(drop, L)                  K(L) at the leading tip of the interior crack, drop from its trailing tip
   release_curve(drop, H0, geometry)    signed G at every L = 1..len(drop) sites ("edge" or "interior")
   predicted_length(G, gamma)           the first L where G falls back below gamma (sites); NaN or len(G)
-  arrest_prediction(run, precursor)    the prediction for one of run.precursors(), with its inputs
+  arrest_prediction(run, precursor)    the prediction for one of run.precursors() or edge_cracks(), with its inputs
+  break_bursts(t, site, gap)           the bursts of an interface's breaks: runs of breaks no more than gap apart
+  edge_cracks(run, gap, min_span)      the bursts that grew a crack from the loaded edge, as arrests to predict
 
 Units: lengths in a unless named otherwise; tractions as stress (same units as dtau); K in stress sqrt(a);
 G and Gamma in energy per a (m c_r^2 / a for the run's measures).
@@ -42,6 +44,7 @@ G and Gamma in energy per a (m c_r^2 / a for the run's measures).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -113,10 +116,12 @@ def _frame(t, time: float, after: bool) -> int:
     return min(k, len(t) - 1) if after else max(k - 1, 0)
 
 
-def arrest_prediction(run, pre) -> dict:
+def arrest_prediction(run, pre, gamma: float | None = None) -> dict:
     """The arrest fracture mechanics predicts for precursor ``pre`` (``run.precursors()``): {"L_measured",
     "L_predicted" (a), "tau_r" (rho c_r^2, the mean traction over the slipped stretch in the first frame after
-    the arrest), "Gamma" (m c_r^2 / a, the mean stored energy of its breaks, ``cracks.gamma_run``),
+    the arrest), "Gamma" (m c_r^2 / a: ``gamma`` when given, the law's fracture energy of a scene that has
+    one; else the mean stored energy of its breaks, ``cracks.gamma_run``, the energy of a bond that breaks at
+    its peak),
     "G_at_arrest_over_Gamma" (the static G at the measured length over Gamma), "from_edge" (whether it started
     within ``edge_sites`` of the contact's edge it runs away from), "geometry" ("edge": the edge crack from
     that edge; "interior": the crack from its nucleation site, module docstring)}.  NaN predictions where the
@@ -138,8 +143,9 @@ def arrest_prediction(run, pre) -> dict:
         before, after = before[depth:], after[depth:]
     n = max(int(round(L_meas)), 1)
     tau_r = float(np.mean(sign * after[:n]))
-    g = np.asarray(gamma_run(run, pre.front)["Gamma"], float)
-    gamma = float(np.nanmean(g)) if np.isfinite(g).any() else math.nan
+    if gamma is None:
+        g = np.asarray(gamma_run(run, pre.front)["Gamma"], float)
+        gamma = float(np.nanmean(g)) if np.isfinite(g).any() else math.nan
     out.update(tau_r=tau_r, Gamma=gamma)
     if not math.isfinite(gamma):
         return out
@@ -152,3 +158,63 @@ def arrest_prediction(run, pre) -> dict:
     out["G_at_arrest_over_Gamma"] = float(G[min(n, len(G)) - 1] / gamma)
     return out
 
+
+
+def break_bursts(t, site, gap: float) -> list[np.ndarray]:
+    """The bursts of a record of breaks (times ``t``, sorted, and their sites): the indices of each maximal run
+    of breaks whose successive times are at most ``gap`` apart (same units as ``t``)."""
+    t = np.asarray(t, float)
+    if not len(t):
+        return []
+    cut = np.flatnonzero(np.diff(t) > gap) + 1
+    return np.split(np.arange(len(t)), cut)
+
+
+@dataclass
+class EdgeCrack:
+    """A burst of breaks that grew the slipped region from the loaded edge (lengths in l, times in l/c_r): its
+    breaks' first and last times, the edge it grew from (``nucleation_x``, the edge site's x), its first break
+    (``first_x``), its farthest break (``arrest_x``) and the crack's length from the edge to there
+    (``arrest_length``), the sites its breaks span (``span``), how many breaks it holds and whether it stopped
+    short of the far edge (``arrested``: its farthest break more than ``friction.edge_sites`` from it)."""
+    nucleation_time: float
+    arrest_time: float
+    nucleation_x: float
+    first_x: float
+    arrest_x: float
+    arrest_length: float
+    span: int
+    breaks: int
+    arrested: bool
+    direction: int
+
+    @property
+    def front(self) -> "EdgeCrack":
+        """Itself, read as a front by ``arrest_prediction`` (which takes only its ``direction``)."""
+        return self
+
+
+def edge_cracks(run, gap: float, min_breaks: int, direction: int = 1) -> list[EdgeCrack]:
+    """The precursors of an interface whose broken sites stay broken (slipping at their residual) until they
+    re-form: the bursts (``break_bursts``, ``gap`` in l/c_r) of the drive's breaks (``run.events``, time >= 0)
+    that hold at least ``min_breaks`` breaks, each as the crack from the loaded edge (x = 0 for ``direction``
+    +1, the push; x = l for -1) to its farthest break.  The catalogue of fronts (``fronts``) cuts such a crack
+    where its tip runs through sites that have not re-formed (no break there), so its pieces read as fronts
+    merged into each other; a burst keeps them whole."""
+    ev, ns = run.events, len(run.x)
+    brk = (np.asarray(ev["kind"]) == 1) & (np.asarray(ev["time"], float) >= 0.0)
+    t, site = np.asarray(ev["time"], float)[brk], np.asarray(ev["site"], int)[brk]
+    order = np.argsort(t, kind="stable")
+    t, site = t[order], site[order]
+    depth = site if direction > 0 else ns - 1 - site              # sites from the loaded edge
+    edge_x = float(run.x[0] if direction > 0 else run.x[-1])
+    out = []
+    for idx in break_bursts(t, site, gap):
+        if len(idx) < min_breaks:
+            continue
+        far, tip = int(depth[idx].max()), int(site[idx][np.argmax(depth[idx])])
+        out.append(EdgeCrack(nucleation_time=float(t[idx[0]]), arrest_time=float(t[idx[-1]]), nucleation_x=edge_x,
+                             first_x=float(run.x[site[idx[0]]]), arrest_x=float(run.x[tip]),
+                             arrest_length=(far + 1) / ns, span=int(far - depth[idx].min() + 1), breaks=len(idx),
+                             arrested=far < ns - 1 - edge_sites(ns), direction=direction))
+    return out

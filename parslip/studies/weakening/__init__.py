@@ -24,6 +24,9 @@ from ..cracks import points, provenance, write  # noqa: F401  (the sweeps' reade
 STUDIES = ("andrews", "kammer", "shape")
 # The sweeps each study reads: Kammer's speeds are measured on Andrews' runs.
 SWEEPS = {"andrews": "andrews", "kammer": "andrews", "shape": "shape"}
+# Study 5, precursors that are cracks (``precursors``): the loader study on the weakening interface.
+STUDIES += ("precursors",)
+SWEEPS["precursors"] = "precursors"
 
 
 def sweeps(runs: str, study: str) -> list[str]:
