@@ -266,6 +266,7 @@ def _deposit_shares(bud, ds, ks, es, energy):
 def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy, bud,
            energy):
     """MASKED single-node tasks t0..t1 of one block (its edge columns), each a column of ``rows`` nodes."""
+    one = np.int64(1)          # a variable: a constant would compile ``rect_full``'s loops again, for it
     cf = prm.cf
     damped, drag, rated = prm.damped, prm.drag, prm.rated
     cs = bud.cs
@@ -290,8 +291,8 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
             s = tk.s ^ (i & 1)
             mask = tk.mask2 if i & 1 else tk.mask
             if mask == ALL_BONDS and not tk.extra and not tk.load:
-                d, k, e = rect_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, 1, j, tk.n, s, K, tk.block, damped, drag,
-                                    rated, energy, cs)
+                d, k, e = rect_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, one, j, tk.n, s, K, tk.block, damped,
+                                    drag, rated, energy, cs)
             else:
                 fx = ex[j] if tk.extra else zero
                 fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)

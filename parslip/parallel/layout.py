@@ -388,8 +388,8 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str, overlap: bool = False) ->
     node gets the same bits whichever runs it, and the cut does not matter.  A task is ``early`` when a peer
     keeps some of its nodes as HALO: the loop runs early tasks first, sends,
     and runs the rest while the messages travel.  Without ``overlap`` a rank with peers runs every task
-    early (whole rows, then the exchange): cutting a row costs a task and its short end, about 0.1 us a
-    row (docs/hpc/scaling.md), more than a message on one node takes.
+    early (whole rows, then the exchange).  Consecutive rows over the same columns then merge into one task
+    (``_merge_rows``), so a cut costs a column task per block rather than a task per row.
     """
     rows = []
     for b in (BOTTOM, TOP):
