@@ -81,22 +81,22 @@ def rect_full(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, K, blk, damped, drag,
         if drag:
             if energy:
                 return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              True, True, False, True)
+                                  True, True, False, True)
             return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
                               True, True, False, False)
         if energy:
             return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
                               True, False, False, True)
         return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              True, False, False, False)
+                          True, False, False, False)
     if rated:
         if energy:
             return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
                               False, False, True, True)
         return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              False, False, True, False)
+                          False, False, True, False)
     if energy:
         return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              False, False, False, True)
+                          False, False, False, True)
     return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              False, False, False, False)
+                      False, False, False, False)
