@@ -206,9 +206,14 @@ def test_overlap_cuts_only_the_rows_peers_keep():
         cut = build_layout(lat, rank, 3, st.reach, st.drive.mode, overlap=True)
         assert plain.tasks["early"].all()
         assert 0 < cut.tasks["early"].sum() < len(cut.tasks) and len(cut.tasks) > len(plain.tasks)
-        assert cut.tasks["n"][cut.tasks["early"] == 1].sum() < plain.tasks["n"].sum() / 2
-        assert cut.tasks["n"].sum() == plain.tasks["n"].sum() == sum(
+        nodes = {k: t["n"] * t["rows"] for k, t in (("plain", plain.tasks), ("cut", cut.tasks))}
+        assert nodes["cut"][cut.tasks["early"] == 1].sum() < nodes["plain"].sum() / 2
+        assert nodes["cut"].sum() == nodes["plain"].sum() == sum(
             int(max(hi - lo, 0)) for b in plain.blocks for r, (lo, hi) in enumerate(b.owned) if b.integrated[r])
+        for lay in (plain, cut):            # each node in exactly one task, a task's rows consecutive
+            seen = {(t["block"], t["row"] + i, t["j0"] + k) for t in lay.tasks for i in range(t["rows"])
+                    for k in range(t["n"])}
+            assert len(seen) == nodes["plain"].sum()
     serial = build_layout(lat, 0, 1, st.reach, st.drive.mode, overlap=True)
     assert not serial.tasks["early"].any()
 

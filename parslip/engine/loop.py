@@ -57,7 +57,8 @@ from .kernels import interface as ik
 from .kernels.clock import now_ns
 from .kernels.floats import like
 from .kernels.scheme import ramp_share
-from .kernels.stencil import K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge, row_full
+from .kernels.rect import rect_full
+from .kernels.stencil import K_RATE, budget_shares, masked_force, node_masked, rate_field, row_edge
 
 # State: each block as [row, column] arrays, x and y apart, at two Verlet levels; and the field z whose bond
 # forces the update takes with the bonds' damping (``kernels.stencil.rate_field``; 1 x 1 arrays without it).
@@ -212,11 +213,12 @@ def _drive(cx, cy, zx, zy, px, py, r, j, s, mask, K, blk, drive, drive_on, shift
     return budget_shares(cx[r, j], cy[r, j], x0, y0, px[r, j], py[r, j], fux, fuy, bud.cs, prm.drag, energy)
 
 
-@njit(cache=True, _nrt=False, fastmath={'contract'})
+@njit(cache=True, _nrt=False, fastmath={'contract'}, inline="always")
 def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, zeros, drive, drive_on, shift, gy,
           bud, energy):
     """Row tasks t0..t1 of one block (FULL, NO_UP, NO_DOWN); bond forces on the field (z_x, z_y).  Their
-    exact shares of the budget go to ``bud.acc`` (``kernels.budget``)."""
+    exact shares of the budget go to ``bud.acc`` (``kernels.budget``).  A FULL task may cover several rows
+    (``kernels.rect``); the others, and driven ones, cover one."""
     cf = prm.cf
     damped, drag, rated = prm.damped, prm.drag, prm.rated
     cs = bud.cs
@@ -229,8 +231,8 @@ def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, z
         r, j0, n, s = tk.row, tk.j0, tk.n, tk.s
         g = gy if tk.load else zero
         if tk.kind == FULL:
-            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped, drag, rated,
-                               energy, cs)
+            d, k, e = rect_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, tk.rows, j0, n, s, K, tk.block, damped,
+                                drag, rated, energy, cs)
         elif tk.extra:
             d, k, e = row_edge(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j0, n, s, K, tk.block, damped,
                                tk.kind == NO_DOWN, cf, ex, ey, zero, g, drag, rated, energy, cs)
@@ -260,10 +262,11 @@ def _deposit_shares(bud, ds, ks, es, energy):
         bg.deposit(bud.acc, bg.Q_EL, es)
 
 
-@njit(cache=True, _nrt=False, fastmath={'contract'})
+@njit(cache=True, _nrt=False, fastmath={'contract'}, inline="always")
 def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, drive, drive_on, shift, gy, bud,
            energy):
-    """MASKED single-node tasks t0..t1 of one block (its edge columns)."""
+    """MASKED single-node tasks t0..t1 of one block (its edge columns), each a column of ``rows`` nodes."""
+    one = np.int64(1)          # a variable: a constant would compile ``rect_full``'s loops again, for it
     cf = prm.cf
     damped, drag, rated = prm.damped, prm.drag, prm.rated
     cs = bud.cs
@@ -273,57 +276,70 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
     es = 0
     for t in range(t0, t1):
         tk = tasks[t]
-        r, j, s = tk.row, tk.j0, tk.s
-        if tk.mask == ALL_BONDS and not tk.extra and not tk.load:
-            # An interior node at a slab's edge: a segment of one, by the row segments' own loops (the serial run
-            # updates it inside a segment).  The task's n, a variable: a constant 1 would compile the loops a
-            # second time, specialised on it.
-            d, k, e = row_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, tk.n, s, K, tk.block, damped, drag, rated,
-                               energy, cs)
-        else:
-            fx = ex[j] if tk.extra else zero
-            fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
-            d, k, e = node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, tk.mask, cf, fx,
-                                  fy, drag, rated, energy, cs)
-        if tk.drive and drive_on and drive.index[r, j] >= 0:
-            d, k, e = _drive(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, tk.mask, K, tk.block, drive, drive_on,
-                             shift, prm, bud, energy)
-        ds += d
-        ks += k
-        es += e
+        j = tk.j0
+        if tk.mask == ALL_BONDS and tk.mask2 == ALL_BONDS and not (tk.extra or tk.load or tk.drive):
+            # Interior nodes at a slab's edge: a column of segments of one, by the row segments' own arithmetic
+            # (the serial run updates them inside a segment).
+            d, k, e = rect_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, tk.row, tk.rows, j, tk.n, tk.s, K, tk.block,
+                                damped, drag, rated, energy, cs)
+            ds += d
+            ks += k
+            es += e
+            continue
+        for i in range(tk.rows):
+            r = tk.row + i
+            s = tk.s ^ (i & 1)
+            mask = tk.mask2 if i & 1 else tk.mask
+            if mask == ALL_BONDS and not tk.extra and not tk.load:
+                d, k, e = rect_full(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, one, j, tk.n, s, K, tk.block, damped,
+                                    drag, rated, energy, cs)
+            else:
+                fx = ex[j] if tk.extra else zero
+                fy = (ey[j] if tk.extra else zero) + (gy if tk.load else zero)
+                d, k, e = node_masked(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, K, tk.block, damped, mask, cf,
+                                      fx, fy, drag, rated, energy, cs)
+            if tk.drive and drive_on and drive.index[r, j] >= 0:
+                d, k, e = _drive(cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, r, j, s, mask, K, tk.block, drive, drive_on,
+                                 shift, prm, bud, energy)
+            ds += d
+            ks += k
+            es += e
     _deposit_shares(bud, ds, ks, es, energy)
 
 
-# Inlined into ``_step`` (twice, a few calls each), as ``_step`` is into ``advance``: numba compiles every
-# function that stays a call into a library of its own, optimises it with all it calls linked in, and then does
-# so again in each caller's library, so each level of calls between ``advance`` and the row kernels cost
-# another optimisation and code generation of all the kernels below it (about a fifth of a cold compile each).
-@njit(cache=True, _nrt=False, inline="always")
-def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy):
+# One call per phase: the loop over the two blocks and the row and node kernels compiled into one function.  A
+# call passes every array descriptor of its arguments (a few hundred words): four calls of ``_rows`` and
+# ``_nodes`` per phase cost about as much as updating a few hundred nodes.  Not inlined into ``_step``, which
+# calls it twice: numba would type, lower and optimise the kernels once for each place.  Compiled with the
+# kernels' flags (``contract``): numba inlines ``_rows`` and ``_nodes`` with their caller's.
+@njit(cache=True, _nrt=False, fastmath={'contract'})
+def _phase(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
     move the halo messages halfway through (``progress``, a no-op on one rank)."""
     tasks = sched.tasks
-    # The substrate is never driven.  A variable, not the constant 0: numba compiles a function once for each
-    # constant argument, so ``_rows`` and ``_nodes`` would be compiled twice, once for each block.
-    undriven = np.int64(0)
-    pb = sched.ptr[phase, 0]            # the substrate (BOTTOM) block
-    pt = sched.ptr[phase, 1]            # the sliding (TOP) block
-    # A call passes a few hundred bytes of array descriptors: skip the empty ones (one rank has no EARLY
-    # tasks, a rigid substrate no rows at all), which saves about a microsecond per step on small lattices.
-    if pb[NODES] > pb[ROWS]:
-        _rows(pb[ROWS], pb[NODES], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-              iface.exb_y, iface.zeros, drive, undriven, shift, gy, bud, energy)
-    if phase == LATE and (pb[END] > pb[ROWS] or pt[END] > pt[ROWS]):
-        progress(plan)             # an MPI call (half a microsecond): only where there is work to hide it behind
-    if pb[END] > pb[NODES]:
-        _nodes(pb[NODES], pb[END], tasks, cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, K, prm, iface.exb_x,
-               iface.exb_y, drive, undriven, shift, gy, bud, energy)
-    if pt[NODES] > pt[ROWS]:
-        _rows(pt[ROWS], pt[NODES], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
-              iface.ext_y, iface.zeros, drive, drive_on, shift, gy, bud, energy)
-    if pt[END] > pt[NODES]:
-        _nodes(pt[NODES], pt[END], tasks, cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, K, prm, iface.ext_x,
-               iface.ext_y, drive, drive_on, shift, gy, bud, energy)
+    for b in range(2):
+        p = sched.ptr[phase, b]
+        if b == 0:                      # the substrate (BOTTOM) block, never driven
+            cx, cy, zx, zy, px, py, ex, ey, on = (cur.bx, cur.by, src.bx, src.by, nxt.bx, nxt.by, iface.exb_x,
+                                                  iface.exb_y, 0)
+        else:                           # the sliding (TOP) block
+            cx, cy, zx, zy, px, py, ex, ey, on = (cur.tx, cur.ty, src.tx, src.ty, nxt.tx, nxt.ty, iface.ext_x,
+                                                  iface.ext_y, drive_on)
+        if p[NODES] > p[ROWS]:
+            _rows(p[ROWS], p[NODES], tasks, cx, cy, zx, zy, px, py, K, prm, ex, ey, iface.zeros, drive, on, shift, gy,
+                  bud, energy)
+        if phase == LATE and b == 0:
+            progress(plan)          # an MPI call (half a microsecond): only where there is work to hide it behind
+        if p[END] > p[NODES]:
+            _nodes(p[NODES], p[END], tasks, cx, cy, zx, zy, px, py, K, prm, ex, ey, drive, on, shift, gy, bud, energy)
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _tasks(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy):
+    """The tasks of one phase, if it has any (a rank without peers has no EARLY tasks, one without overlap no
+    LATE ones)."""
+    if sched.ptr[phase, 1, END] > sched.ptr[phase, 0, ROWS]:
+        _phase(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
 
 
 @njit(cache=True, _nrt=False)
@@ -351,25 +367,26 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
     j2 = jump * jump
     for t in range(tasks.shape[0]):
         tk = tasks[t]
-        b, r, j0, nn = tk.block, tk.row, tk.j0, tk.n
-        if b == 0:
-            if _row_moves(cur.bx, cur.by, nxt.bx, nxt.by, r, j0, nn) <= j2:
-                continue
-            cx, cy, px, py, base = cur.bx, cur.by, nxt.bx, nxt.by, g.bbase
-        else:
-            if _row_moves(cur.tx, cur.ty, nxt.tx, nxt.ty, r, j0, nn) <= j2:
-                continue
-            cx, cy, px, py, base = cur.tx, cur.ty, nxt.tx, nxt.ty, g.tbase
-        for j in range(j0, j0 + nn):
-            if not (np.isfinite(px[r, j]) and np.isfinite(py[r, j])):
-                _flag(flags, FLAG_NONFINITE, n + 1, b, r, j + base, np.inf)
-                return
-            dx = float(px[r, j]) - float(cx[r, j])
-            dy = float(py[r, j]) - float(cy[r, j])
-            d = np.sqrt(dx * dx + dy * dy)
-            if d > jump:
-                _flag(flags, FLAG_RUNAWAY, n + 1, b, r, j + base, d)
-                return
+        b, j0, nn = tk.block, tk.j0, tk.n
+        for r in range(tk.row, tk.row + tk.rows):
+            if b == 0:
+                if _row_moves(cur.bx, cur.by, nxt.bx, nxt.by, r, j0, nn) <= j2:
+                    continue
+                cx, cy, px, py, base = cur.bx, cur.by, nxt.bx, nxt.by, g.bbase
+            else:
+                if _row_moves(cur.tx, cur.ty, nxt.tx, nxt.ty, r, j0, nn) <= j2:
+                    continue
+                cx, cy, px, py, base = cur.tx, cur.ty, nxt.tx, nxt.ty, g.tbase
+            for j in range(j0, j0 + nn):
+                if not (np.isfinite(px[r, j]) and np.isfinite(py[r, j])):
+                    _flag(flags, FLAG_NONFINITE, n + 1, b, r, j + base, np.inf)
+                    return
+                dx = float(px[r, j]) - float(cx[r, j])
+                dy = float(py[r, j]) - float(cy[r, j])
+                d = np.sqrt(dx * dx + dy * dy)
+                if d > jump:
+                    _flag(flags, FLAG_RUNAWAY, n + 1, b, r, j + base, d)
+                    return
     if prm.has_iface and not prm.rigid:
         br = prm.brow
         for i in range(max(g.bown0, g.blo + 1), g.bown1):
@@ -487,7 +504,8 @@ def _energies(n, cur, old, sched, prm, iface, bud, out):
     for t in range(tasks.shape[0]):
         tk = tasks[t]
         if tk.load:
-            bg.load_sum(cur.ty, old.ty, tk.row, tk.j0, tk.n, out)
+            for r in range(tk.row, tk.row + tk.rows):
+                bg.load_sum(cur.ty, old.ty, r, tk.j0, tk.n, out)
     if prm.has_iface:
         br = prm.brow
         ik.staggered(n, cur.tx[PAD], cur.ty[PAD], cur.bx[br], cur.by[br], old.tx[PAD], old.ty[PAD], old.bx[br],

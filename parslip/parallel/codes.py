@@ -17,10 +17,12 @@ SEARCH_MARGIN = 0.5
 FULL, NO_UP, NO_DOWN, MASKED = 0, 1, 2, 3
 # Extra per-column forces a row adds: none, the block's interface row, the substrate's interface row.
 EXTRA_NONE, EXTRA_TOP, EXTRA_BOTTOM = 0, 1, 2
-# Columns of a task row: block, row, first local column j0, node count n, row kind, bond mask (MASKED),
-# extra force, load (1: the normal load acts), drive (1: x prescribed once the drive runs), early (a peer
-# keeps these nodes), s (up/down neighbours of column c are c - 1 + s and c + s).
-TASK_FIELDS = ("block", "row", "j0", "n", "kind", "mask", "extra", "load", "drive", "early", "s")
+# Columns of a task row: block, first row, first local column j0, node count n per row, row kind, bond mask
+# (MASKED), extra force, load (1: the normal load acts), drive (1: x prescribed once the drive runs), early (a
+# peer keeps these nodes), s (up/down neighbours of column c are c - 1 + s and c + s), rows (the task covers
+# rows row .. row + rows - 1 over the same columns: FULL rows, or a MASKED column; row row + i has the shift
+# s ^ (i & 1)), mask2 (the bond mask of the odd ones among them, i odd).
+TASK_FIELDS = ("block", "row", "j0", "n", "kind", "mask", "extra", "load", "drive", "early", "s", "rows", "mask2")
 # The schedule is a structured array: the compiled loop reads a task's fields by name (``task.row``).
 TASK_DTYPE = np.dtype([(name, np.int64) for name in TASK_FIELDS])
 # Neighbour slots (bit k of a mask): 0 right, 1 up-right, 2 up-left, 3 left, 4 down-left, 5 down-right.

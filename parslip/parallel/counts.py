@@ -16,7 +16,9 @@ The loop's tasks (``layout._tasks``): each integrated row of a rank's owned colu
 block's first and last column (updated with their missing bonds); a piece of at most ``layout.SHORT`` columns
 runs node by node (``singles``), a longer one as one vectorised segment (``segments``).  With overlap each
 row is also cut where the columns a peer keeps end: counted as one single node per row and side with a peer
-(the bulk rows' halo of one column; the interface rows' wider halos are left out).
+(the bulk rows' halo of one column; the interface rows' wider halos are left out).  The schedule runs
+consecutive rows over the same columns as one task (``layout._merge_rows``); the counts are of row segments
+and nodes, whatever task holds them (the travel model's coefficients are per row segment and per node).
 """
 from __future__ import annotations
 

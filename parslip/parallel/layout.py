@@ -388,8 +388,8 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str, overlap: bool = False) ->
     node gets the same bits whichever runs it, and the cut does not matter.  A task is ``early`` when a peer
     keeps some of its nodes as HALO: the loop runs early tasks first, sends,
     and runs the rest while the messages travel.  Without ``overlap`` a rank with peers runs every task
-    early (whole rows, then the exchange): cutting a row costs a task and its short end, about 0.1 us a
-    row (docs/hpc/scaling.md), more than a message on one node takes.
+    early (whole rows, then the exchange).  Consecutive rows over the same columns then merge into one task
+    (``_merge_rows``), so a cut costs a column task per block rather than a task per row.
     """
     rows = []
     for b in (BOTTOM, TOP):
@@ -440,15 +440,40 @@ def _tasks(lattice: Lattice, blocks, peers, mode: str, overlap: bool = False) ->
                     # Block edges, and segments too short to pay for a vectorised loop: node by node.
                     # With every bond of its row present, the single-node kernel gives the same bits.
                     for c in range(c_lo, c_hi):
-                        rows.append((b, blk.prow(r), blk.j(c), 1, MASKED, _mask(blk, r, c), extra, load,
-                                     col_drive(c), early(c, c + 1), blk.shift(r)))
+                        m = _mask(blk, r, c)
+                        rows.append((b, blk.prow(r), blk.j(c), 1, MASKED, m, extra, load, col_drive(c),
+                                     early(c, c + 1), blk.shift(r), 1, m))
                 else:
                     rows.append((b, blk.prow(r), blk.j(c_lo), c_hi - c_lo, kind, ALL_BONDS, extra, load,
-                                 row_drive, early(c_lo, c_hi), blk.shift(r)))
+                                 row_drive, early(c_lo, c_hi), blk.shift(r), 1, ALL_BONDS))
     t = np.array([tuple(r) for r in rows], TASK_DTYPE)
-    # Grouped by phase (early first), block, then row tasks before single nodes, each in row order.
-    order = np.lexsort((t["j0"], t["row"], t["kind"] == MASKED, t["block"], 1 - t["early"]))
-    return t[order]
+    # Grouped by phase (early first), block, then row tasks before single nodes, each by its columns, then
+    # rows: consecutive rows over the same columns are neighbours, and merge.
+    order = np.lexsort((t["row"], t["n"], t["j0"], t["kind"] == MASKED, t["block"], 1 - t["early"]))
+    return _merge_rows(t[order])
+
+
+def _merge_rows(t: np.ndarray) -> np.ndarray:
+    """Tasks of consecutive rows over the same columns merged into one task of several rows (``codes``: rows,
+    mask2): the FULL rows of a block (not driven), and the single nodes of a column whose masks alternate with
+    the rows' shift.  One task dispatch and the views of a row (``kernels.rect``) where each row was a task:
+    about 25 ns a row (``studies.bench.rows``).  The nodes and their kernels' arithmetic do not change."""
+    names = t.dtype.names
+    same = [names.index(f) for f in ("block", "j0", "n", "kind", "extra", "load", "drive", "early")]
+    row, kind, drive, mask, rows, mask2 = (names.index(f) for f in ("row", "kind", "drive", "mask", "rows", "mask2"))
+    out = []
+    for tk in t.tolist():
+        tk = list(tk)
+        last = out[-1] if out else None
+        if (last is not None and all(last[f] == tk[f] for f in same) and tk[row] == last[row] + last[rows]
+                and ((tk[kind] == FULL and not tk[drive]) or tk[kind] == MASKED)):
+            if tk[kind] == FULL or last[rows] == 1 or tk[mask] == last[mask if last[rows] % 2 == 0 else mask2]:
+                if last[rows] == 1:
+                    last[mask2] = tk[mask]
+                last[rows] += 1
+                continue
+        out.append(tk)
+    return np.array([tuple(r) for r in out], t.dtype)
 
 
 

@@ -3,13 +3,15 @@ of a node updated on its own, timed in the compiled loop's own kernels (``engine
 
     python -m parslip.studies.bench.rows            # one JSON line: segment_ns, single_ns, node_ns_hot
 
-Every step the loop runs each integrated row of a rank's slab as one task: a segment, updated by one
-vectorised loop, and its block-edge columns (and pieces of at most ``layout.SHORT`` columns) node by node
-(``parallel.layout._tasks``).  A segment of n nodes costs about segment_ns + n node_ns_hot: segment_ns (the
-task's fields, the row's views, the vector loop's ends) is the intercept of the time of 16 segments against
-n over n = 8-256, node_ns_hot the slope (in cache).  single_ns is the time of one single-node task.  The
-travel model charges both (``scaling.step_model``): on a slab of many rows and few columns they are most of a
-step.  On the l = 100 scene of ``bench.case`` (no MPI: one rank's state), medians of repeats.
+Every step the loop runs each block's interior rows over the same columns as one task (``kernels.rect``:
+one vectorised loop per row), its other rows as a task each, and its block-edge columns (and pieces of at
+most ``layout.SHORT`` columns) node by node, a column of consecutive rows one task
+(``parallel.layout._tasks``).  A row segment of n nodes costs about segment_ns + n node_ns_hot: segment_ns
+(the row's views, the vector loop's ends, its share of the task) is the intercept of the time per row of a
+task of 16 interior rows against n over n = 8-256, node_ns_hot the slope (in cache).  single_ns is the time
+per node of a column of 16 nodes updated one by one.  The travel model charges both per row segment and per
+node (``scaling.step_model``; ``parallel.counts`` counts them): on a slab of many rows and few columns they
+are most of a step.  On the l = 100 scene of ``bench.case`` (no MPI: one rank's state), medians of repeats.
 """
 from __future__ import annotations
 
@@ -38,7 +40,8 @@ def _singles(reps, tasks, lv, K, prm, iface, drive, bud):
                  iface.exb_y, drive, 0, 0.0, 0.0, bud, False)
 
 
-def _ns_per_task(kernel, sim, tasks, repeats: int = 5, reps: int = 20000) -> float:
+def _ns_per_row(kernel, sim, tasks, repeats: int = 5, reps: int = 20000) -> float:
+    """Time per row (ns) of one pass over ``tasks`` (medians of ``repeats``)."""
     s = sim.state
     args = (tasks, s.levels, s.K, sim.params, s.iface, s.drive, sim.budget)
     kernel(10, *args)                     # compile or load, warm the caches
@@ -46,7 +49,7 @@ def _ns_per_task(kernel, sim, tasks, repeats: int = 5, reps: int = 20000) -> flo
     for _ in range(repeats):
         t = time.perf_counter()
         kernel(reps, *args)
-        best.append((time.perf_counter() - t) / reps * 1e9 / len(tasks))
+        best.append((time.perf_counter() - t) / reps * 1e9 / int(tasks["rows"].sum()))
     return float(np.median(best))
 
 
@@ -58,19 +61,19 @@ def measure() -> dict:
     sim = Simulation(derive(scene_at(100, "shear", "float64")), None)
     sched = sim.sched.tasks
     bottom = sched[sched["block"] == 0]
-    full = bottom[bottom["kind"] == FULL][0]
-    one = bottom[bottom["kind"] == MASKED][0]
+    full = bottom[bottom["kind"] == FULL][:1].copy()
+    one = bottom[bottom["kind"] == MASKED][:1].copy()
+    # 16 interior rows of the substrate (each its own memory) as one task, as the schedule runs them.
+    for tk in (full, one):
+        assert tk["row"][0] == 2 and tk["rows"][0] >= 16
+        tk["rows"] = 16
     sizes = np.array([8, 16, 32, 64, 128, 256])
     per = []
     for n in sizes:
-        tk = np.repeat(full[None], 16)
-        tk["row"] = np.arange(2, 18)          # 16 interior rows of the substrate, each its own memory
-        tk["n"] = n
-        per.append(_ns_per_task(_segments, sim, tk))
+        full["n"] = n
+        per.append(_ns_per_row(_segments, sim, full))
     slope, intercept = np.polyfit(sizes.astype(float), np.array(per), 1)
-    tk = np.repeat(one[None], 16)
-    tk["row"] = np.arange(2, 18)
-    return {"segment_ns": float(intercept), "node_ns_hot": float(slope), "single_ns": _ns_per_task(_singles, sim, tk),
+    return {"segment_ns": float(intercept), "node_ns_hot": float(slope), "single_ns": _ns_per_row(_singles, sim, one),
             "segment_sizes": sizes.tolist(), "segment_ns_each": per}
 
 

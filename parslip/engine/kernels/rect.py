@@ -1,0 +1,102 @@
+"""The bulk update of a rectangle of interior rows: consecutive rows of a block with every bond present, over
+the same columns, in one call.
+
+Responsible for the loop over rows and the views each row needs; the arithmetic of a node is the row
+kernel's (``stencil._full``, the damped Verlet step of ``stencil._full_loop``), term for term, so a node
+gets the same bits whichever kernel updates it and however the schedule groups its rows.
+
+A task of the schedule (``parallel.layout._tasks``) that covers rows r0 .. r0 + rows - 1 over columns
+[j0, j0 + n) costs one dispatch, and each row three views of the field per coordinate (its own row from
+j0 - 1, the rows above and below from j0 - 1 + s) where a row on its own took seven: the fixed cost of a
+row, about 55 ns in ``stencil.row_full`` with its task (``studies.bench.rows``), is mostly the views and
+the checks the vectorised loop makes that they do not overlap what it writes.  Row r0 + i has shift
+s = s0 ^ (i & 1): the rows' x offsets alternate.
+"""
+from numba import njit
+
+from .exact import MAGIC_BITS, raw
+from .stencil import K_A, K_B, K_C, K_DAMP, K_N, K_T, _full, budget_shares
+
+
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
+def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, damped, drag, rated, energy):
+    """The loop of ``rect_full`` for constant (damped, drag, rated, energy), as ``stencil._full_loop``."""
+    ds = 0
+    ks = 0
+    es = 0
+    for i in range(rows):
+        r = r0 + i
+        s = s0 ^ (i & 1)
+        # Row r from column j0 - 1 (left, centre, right at k, k + 1, k + 2), the rows above and below from
+        # j0 - 1 + s (up-left and up-right at k, k + 1; down-left and down-right likewise).
+        xh, yh = zx[r, j0 - 1:j0 + 1 + n], zy[r, j0 - 1:j0 + 1 + n]
+        xu, yu = zx[r + 1, j0 - 1 + s:j0 + s + n], zy[r + 1, j0 - 1 + s:j0 + s + n]
+        xd, yd = zx[r - 1, j0 - 1 + s:j0 + s + n], zy[r - 1, j0 - 1 + s:j0 + s + n]
+        ch, dh = cx[r, j0 - 1:j0 + 1 + n], cy[r, j0 - 1:j0 + 1 + n]
+        cu, du = cx[r + 1, j0 - 1 + s:j0 + s + n], cy[r + 1, j0 - 1 + s:j0 + s + n]
+        cd, dd = cx[r - 1, j0 - 1 + s:j0 + s + n], cy[r - 1, j0 - 1 + s:j0 + s + n]
+        ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
+        for k in range(n):
+            fx, fy = _full(xh[k + 1], yh[k + 1], xh[k], xh[k + 2], yh[k], yh[k + 2], xu[k + 1], xd[k], xu[k],
+                           xd[k + 1], yu[k + 1], yd[k], yu[k], yd[k + 1], kn, kt, a, b, c)
+            if rated:
+                ux, uy = ch[k + 1], dh[k + 1]
+                gx, gy = fx, fy
+                if energy:
+                    gx, gy = _full(ux, uy, ch[k], ch[k + 2], dh[k], dh[k + 2], cu[k + 1], cd[k], cu[k], cd[k + 1],
+                                   du[k + 1], dd[k], du[k], dd[k + 1], kn, kt, a, b, c)
+            else:
+                ux, uy = xh[k + 1], yh[k + 1]
+                gx, gy = fx, fy
+            qx, qy = ox[k], oy[k]
+            if damped:
+                nx = ux + (bb * (ux - qx) + fx)
+                ny = uy + (bb * (uy - qy) + fy)
+            else:
+                nx = ux + ((ux - qx) + fx)
+                ny = uy + ((uy - qy) + fy)
+            ox[k] = nx
+            oy[k] = ny
+            if drag and not energy:         # a step of "checked": the body drag alone, its offset taken once below
+                dx, dy = float(nx) - float(qx), float(ny) - float(qy)
+                ds += raw((dx * dx + dy * dy) * cs[0])
+            elif drag or energy:
+                d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy)
+                ds += d
+                ks += kk
+                es += e
+    if drag and not energy:
+        ds -= rows * n * MAGIC_BITS
+    return ds, ks, es
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def rect_full(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, K, blk, damped, drag, rated, energy, cs):
+    """Interior rows r0 .. r0 + rows - 1 over columns [j0, j0 + n): all six bonds, no external force, as
+    ``stencil.row_full`` row by row.  Writes u(t+dt) into px, py; returns the rectangle's exact shares of the
+    budget (damping, kinetic, elastic)."""
+    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
+    # One call per combination of the flags, each a loop without branches (as ``stencil.row_full``).
+    if damped:
+        if drag:
+            if energy:
+                return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                                  True, True, False, True)
+            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                              True, True, False, False)
+        if energy:
+            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                              True, False, False, True)
+        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                          True, False, False, False)
+    if rated:
+        if energy:
+            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                              False, False, True, True)
+        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                          False, False, True, False)
+    if energy:
+        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                          False, False, False, True)
+    return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
+                      False, False, False, False)
