@@ -12,7 +12,8 @@ level ``c`` (u(t)) and overwrites level ``p`` (u(t - dt)) with u(t + dt):
     B = (1 - zeta dt/2)/(1 + zeta dt/2),  C = dt^2/(1 + zeta dt/2),
 
 the second form adding a small increment to u, never forming 2u - u_old;
-with zeta = 0, B = 1 and its multiplication is skipped (same bits).  F is the
+with zeta = 0, B = 1 exactly and multiplying by it changes no bit (fma(1, d, f) rounds as d + f), so the
+kernels take B as a value and their ``damped`` flag only describes the step.  F is the
 Born force (paper Eq. 2.1) written with the 2x2 stiffness of each bond
 direction,
 
@@ -96,13 +97,13 @@ def _six(zx, zy, r, j0, n, s):
 
 # A compiled function of its own, one version for each combination of the flags (numba compiles a function once
 # for each constant argument), which LLVM inlines where it is called (``forceinline``): no call per row segment
-# (one cost 4 % of a step at l = 500), and each of the eight loops typed, lowered and optimised once.  numba's
+# (one cost 4 % of a step at l = 500), and each of the six loops typed, lowered and optimised once.  numba's
 # own inlining (inline="always") typed, lowered and optimised each loop again at every place ``row_full`` went
 # (docs/developer/kernels.md, "What a compile costs").
 @njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
-def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, drag, rated, energy):
-    """The loop of ``row_full``, for constant (damped, drag, rated, energy): the compiler keeps one branch-free
-    loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
+def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, rated, drag, energy):
+    """The loop of ``row_full``, for constant (rated, drag, energy): the compiler keeps one branch-free loop per
+    combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
     xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr = _six(zx, zy, r, j0, n, s)
     cm, c0, cp, dm, d0, dp, cul, cur, dul, dur, cdl, cdr, ddl, ddr = _six(cx, cy, r, j0, n, s)
     ds = 0
@@ -113,26 +114,23 @@ def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, dam
                        ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
         if rated:
             ux, uy = c0[k], d0[k]
-            gx, gy = fx, fy
-            if energy:
-                gx, gy = _full(ux, uy, cm[k], cp[k], dm[k], dp[k], cur[k], cdl[k], cul[k], cdr[k], dur[k], ddl[k],
-                               dul[k], ddr[k], kn, kt, a, b, c)
         else:
             ux, uy = x0[k], y0[k]
-            gx, gy = fx, fy
+        # B = 1 exactly without the body drag: 1 (u - q) + f, even contracted to fma(1, u - q, f), rounds as
+        # (u - q) + f, so the undamped loops need no version of their own.
         qx, qy = ox[k], oy[k]
-        if damped:
-            nx = ux + (bb * (ux - qx) + fx)
-            ny = uy + (bb * (uy - qy) + fy)
-        else:
-            nx = ux + ((ux - qx) + fx)
-            ny = uy + ((uy - qy) + fy)
+        nx = ux + (bb * (ux - qx) + fx)
+        ny = uy + (bb * (uy - qy) + fy)
         ox[k] = nx
         oy[k] = ny
         if drag and not energy:         # a step of "checked": the body drag alone, its offset taken once below
             dx, dy = float(nx) - float(qx), float(ny) - float(qy)
             ds += raw((dx * dx + dy * dy) * cs[0])
         elif drag or energy:
+            gx, gy = fx, fy
+            if energy and rated:
+                gx, gy = _full(ux, uy, cm[k], cp[k], dm[k], dp[k], cur[k], cdl[k], cul[k], cdr[k], dur[k], ddl[k],
+                               dul[k], ddr[k], kn, kt, a, b, c)
             d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy)
             ds += d
             ks += kk
@@ -149,22 +147,19 @@ def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, e
     Returns the segment's exact shares of the budget (damping, kinetic, elastic; ``budget_shares``)."""
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
-    # One call per combination, each with constant flags: a loop without branches for each.
-    if damped:
-        if drag:
-            if energy:
-                return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, True, False, True)
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, True, False, False)
-        if energy:
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False, True)
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False, False)
+    # One call per combination, each with constant flags: a loop without branches for each (the bonds' dashpots
+    # and the body drag never act together).
     if rated:
         if energy:
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True, True)
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True, False)
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, True)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False)
+    if drag:
+        if energy:
+            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, True, True)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, True, False)
     if energy:
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, True)
-    return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, False)
+        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True)
+    return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
@@ -209,8 +204,6 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
     um, u0, up_, vm, v0, vp, up2, uq2, vp2, vq2 = _views(cx, cy, r, rr, j0, n, s, up)
     exs, eys = ex[j0:j0 + n], ey[j0:j0 + n]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
-    one = like(1, bb)
-    damp = bb if damped else one
     ds = 0
     ks = 0
     es = 0
@@ -218,8 +211,8 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
         fx, fy = _edge_force(zx, zy, xm, x0, xp, ym, y0, yp, xp_, xq_, yp_, yq_, k, kn, kt, a, b, c)
         ux, uy = u0[k], v0[k]
         qx, qy = ox[k], oy[k]
-        nx = ux + (damp * (ux - qx) + (fx + cf * (exs[k] + gx)))
-        ny = uy + (damp * (uy - qy) + (fy + cf * (eys[k] + gy)))
+        nx = ux + (bb * (ux - qx) + (fx + cf * (exs[k] + gx)))
+        ny = uy + (bb * (uy - qy) + (fy + cf * (eys[k] + gy)))
         ox[k] = nx
         oy[k] = ny
         if drag or energy:
@@ -262,10 +255,9 @@ def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, f
     bb = K[blk, K_DAMP]
     ux, uy = cx[r, j], cy[r, j]
     gx, gy = masked_force(zx, zy, r, j, s, K, blk, mask)
-    damp = bb if damped else like(1, bb)
     qx, qy = px[r, j], py[r, j]
-    nx = ux + (damp * (ux - qx) + (gx + cf * fx))
-    ny = uy + (damp * (uy - qy) + (gy + cf * fy))
+    nx = ux + (bb * (ux - qx) + (gx + cf * fx))
+    ny = uy + (bb * (uy - qy) + (gy + cf * fy))
     px[r, j] = nx
     py[r, j] = ny
     if not (drag or energy):
