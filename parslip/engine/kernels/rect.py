@@ -2,13 +2,13 @@
 the same columns, in one call.
 
 Responsible for the loop over rows and the views each row needs; the arithmetic of a node is the row
-kernel's (``stencil._full``, the damped Verlet step of ``stencil._full_loop``), term for term, so a node
+kernel's (``stencil._full`` and the damped Verlet step of ``stencil``'s docstring), term for term, so a node
 gets the same bits whichever kernel updates it and however the schedule groups its rows.
 
 A task of the schedule (``parallel.layout._tasks``) that covers rows r0 .. r0 + rows - 1 over columns
 [j0, j0 + n) costs one dispatch, and each row three views of the field per coordinate (its own row from
 j0 - 1, the rows above and below from j0 - 1 + s) where a row on its own took seven: the fixed cost of a
-row, about 55 ns in ``stencil.row_full`` with its task (``studies.bench.rows``), is mostly the views and
+row, about 55 ns when each row was a task of its own (``studies.bench.rows``), was mostly the views and
 the checks the vectorised loop makes that they do not overlap what it writes.  Row r0 + i has shift
 s = s0 ^ (i & 1): the rows' x offsets alternate.
 """
@@ -19,8 +19,9 @@ from .stencil import K_A, K_B, K_C, K_DAMP, K_N, K_T, _full, budget_shares
 
 
 @njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
-def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, damped, drag, rated, energy):
-    """The loop of ``rect_full`` for constant (damped, drag, rated, energy), as ``stencil._full_loop``."""
+def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, rated, drag, energy):
+    """The loop of ``rect_full`` for constant (rated, drag, energy): the compiler keeps one branch-free loop per
+    combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
     ds = 0
     ks = 0
     es = 0
@@ -41,26 +42,23 @@ def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb,
                            xd[k + 1], yu[k + 1], yd[k], yu[k], yd[k + 1], kn, kt, a, b, c)
             if rated:
                 ux, uy = ch[k + 1], dh[k + 1]
-                gx, gy = fx, fy
-                if energy:
-                    gx, gy = _full(ux, uy, ch[k], ch[k + 2], dh[k], dh[k + 2], cu[k + 1], cd[k], cu[k], cd[k + 1],
-                                   du[k + 1], dd[k], du[k], dd[k + 1], kn, kt, a, b, c)
             else:
                 ux, uy = xh[k + 1], yh[k + 1]
-                gx, gy = fx, fy
+            # B = 1 exactly without the body drag: 1 (u - q) + f, even contracted to fma(1, u - q, f), rounds as
+            # (u - q) + f, so the undamped loops need no version of their own.
             qx, qy = ox[k], oy[k]
-            if damped:
-                nx = ux + (bb * (ux - qx) + fx)
-                ny = uy + (bb * (uy - qy) + fy)
-            else:
-                nx = ux + ((ux - qx) + fx)
-                ny = uy + ((uy - qy) + fy)
+            nx = ux + (bb * (ux - qx) + fx)
+            ny = uy + (bb * (uy - qy) + fy)
             ox[k] = nx
             oy[k] = ny
             if drag and not energy:         # a step of "checked": the body drag alone, its offset taken once below
                 dx, dy = float(nx) - float(qx), float(ny) - float(qy)
                 ds += raw((dx * dx + dy * dy) * cs[0])
             elif drag or energy:
+                gx, gy = fx, fy
+                if energy and rated:
+                    gx, gy = _full(ux, uy, ch[k], ch[k + 2], dh[k], dh[k + 2], cu[k + 1], cd[k], cu[k], cd[k + 1],
+                                   du[k + 1], dd[k], du[k], dd[k + 1], kn, kt, a, b, c)
                 d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy)
                 ds += d
                 ks += kk
@@ -73,30 +71,19 @@ def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb,
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
 def rect_full(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, K, blk, damped, drag, rated, energy, cs):
     """Interior rows r0 .. r0 + rows - 1 over columns [j0, j0 + n): all six bonds, no external force, as
-    ``stencil.row_full`` row by row.  Writes u(t+dt) into px, py; returns the rectangle's exact shares of the
+    each row as a block's interior row.  Writes u(t+dt) into px, py; returns the rectangle's exact shares of the
     budget (damping, kinetic, elastic)."""
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
-    # One call per combination of the flags, each a loop without branches (as ``stencil.row_full``).
-    if damped:
-        if drag:
-            if energy:
-                return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                                  True, True, False, True)
-            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              True, True, False, False)
-        if energy:
-            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              True, False, False, True)
-        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                          True, False, False, False)
+    # One call per combination of the flags, each a loop without branches; the bonds' dashpots and the body
+    # drag never act together (``damped`` only describes the step: B is a value, 1 without the drag).
     if rated:
         if energy:
-            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                              False, False, True, True)
-        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                          False, False, True, False)
+            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, True, False, True)
+        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, True, False, False)
+    if drag:
+        if energy:
+            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, True, True)
+        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, True, False)
     if energy:
-        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                          False, False, False, True)
-    return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs,
-                      False, False, False, False)
+        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, False, True)
+    return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, False, False)

@@ -1,4 +1,4 @@
-"""The bulk Born update of one row segment: bond forces fused with damped Verlet.
+"""The bulk Born update of a node: bond forces fused with damped Verlet (interior rows: ``kernels.rect``).
 
 Responsible for the arithmetic of a node update only; which rows and columns
 to update comes from the row schedule (``parallel.layout``).
@@ -12,7 +12,8 @@ level ``c`` (u(t)) and overwrites level ``p`` (u(t - dt)) with u(t + dt):
     B = (1 - zeta dt/2)/(1 + zeta dt/2),  C = dt^2/(1 + zeta dt/2),
 
 the second form adding a small increment to u, never forming 2u - u_old;
-with zeta = 0, B = 1 and its multiplication is skipped (same bits).  F is the
+with zeta = 0, B = 1 exactly and multiplying by it changes no bit (fma(1, d, f) rounds as d + f), so the
+kernels take B as a value and their ``damped`` flag only describes the step.  F is the
 Born force (paper Eq. 2.1) written with the 2x2 stiffness of each bond
 direction,
 
@@ -40,7 +41,7 @@ decomposition.
 """
 from numba import njit
 
-from .exact import MAGIC_BITS, quant, raw
+from .exact import quant
 from .floats import like
 
 # Bits of the neighbour mask: right, up-right, up-left, left, down-left, down-right.
@@ -79,92 +80,6 @@ def budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy):
         k = quant((vx * vx + vy * vy) * cs[2])
         e = quant((float(nx) * float(gx) + float(ny) * float(gy)) * cs[3])
     return d, k, e
-
-
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def _six(zx, zy, r, j0, n, s):
-    """Views of a row segment of the field z and of its six neighbours: left, centre, right, then up-left,
-    up-right, down-left, down-right (x, y of each)."""
-    xm, x0, xp = zx[r, j0 - 1:j0 - 1 + n], zx[r, j0:j0 + n], zx[r, j0 + 1:j0 + 1 + n]
-    ym, y0, yp = zy[r, j0 - 1:j0 - 1 + n], zy[r, j0:j0 + n], zy[r, j0 + 1:j0 + 1 + n]
-    xul, xur = zx[r + 1, j0 - 1 + s:j0 - 1 + s + n], zx[r + 1, j0 + s:j0 + s + n]
-    yul, yur = zy[r + 1, j0 - 1 + s:j0 - 1 + s + n], zy[r + 1, j0 + s:j0 + s + n]
-    xdl, xdr = zx[r - 1, j0 - 1 + s:j0 - 1 + s + n], zx[r - 1, j0 + s:j0 + s + n]
-    ydl, ydr = zy[r - 1, j0 - 1 + s:j0 - 1 + s + n], zy[r - 1, j0 + s:j0 + s + n]
-    return xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr
-
-
-# A compiled function of its own, one version for each combination of the flags (numba compiles a function once
-# for each constant argument), which LLVM inlines where it is called (``forceinline``): no call per row segment
-# (one cost 4 % of a step at l = 500), and each of the eight loops typed, lowered and optimised once.  numba's
-# own inlining (inline="always") typed, lowered and optimised each loop again at every place ``row_full`` went
-# (docs/developer/kernels.md, "What a compile costs").
-@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
-def _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, damped, drag, rated, energy):
-    """The loop of ``row_full``, for constant (damped, drag, rated, energy): the compiler keeps one branch-free
-    loop per combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
-    xm, x0, xp, ym, y0, yp, xul, xur, yul, yur, xdl, xdr, ydl, ydr = _six(zx, zy, r, j0, n, s)
-    cm, c0, cp, dm, d0, dp, cul, cur, dul, dur, cdl, cdr, ddl, ddr = _six(cx, cy, r, j0, n, s)
-    ds = 0
-    ks = 0
-    es = 0
-    for k in range(n):
-        fx, fy = _full(x0[k], y0[k], xm[k], xp[k], ym[k], yp[k], xur[k], xdl[k], xul[k], xdr[k], yur[k],
-                       ydl[k], yul[k], ydr[k], kn, kt, a, b, c)
-        if rated:
-            ux, uy = c0[k], d0[k]
-            gx, gy = fx, fy
-            if energy:
-                gx, gy = _full(ux, uy, cm[k], cp[k], dm[k], dp[k], cur[k], cdl[k], cul[k], cdr[k], dur[k], ddl[k],
-                               dul[k], ddr[k], kn, kt, a, b, c)
-        else:
-            ux, uy = x0[k], y0[k]
-            gx, gy = fx, fy
-        qx, qy = ox[k], oy[k]
-        if damped:
-            nx = ux + (bb * (ux - qx) + fx)
-            ny = uy + (bb * (uy - qy) + fy)
-        else:
-            nx = ux + ((ux - qx) + fx)
-            ny = uy + ((uy - qy) + fy)
-        ox[k] = nx
-        oy[k] = ny
-        if drag and not energy:         # a step of "checked": the body drag alone, its offset taken once below
-            dx, dy = float(nx) - float(qx), float(ny) - float(qy)
-            ds += raw((dx * dx + dy * dy) * cs[0])
-        elif drag or energy:
-            d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy)
-            ds += d
-            ks += kk
-            es += e
-    if drag and not energy:
-        ds -= n * MAGIC_BITS
-    return ds, ks, es
-
-
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
-def row_full(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, drag, rated, energy, cs):
-    """Interior row segment: all six bonds, no external force.  Writes u(t+dt) into px, py; the bond
-    forces are those of the field (zx, zy) (u(t) itself, or with the bonds' dashpots ``rate_field``).
-    Returns the segment's exact shares of the budget (damping, kinetic, elastic; ``budget_shares``)."""
-    kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
-    ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
-    # One call per combination, each with constant flags: a loop without branches for each.
-    if damped:
-        if drag:
-            if energy:
-                return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, True, False, True)
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, True, False, False)
-        if energy:
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False, True)
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, True, False, False, False)
-    if rated:
-        if energy:
-            return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True, True)
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, True, False)
-    if energy:
-        return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, True)
-    return _full_loop(cx, cy, zx, zy, ox, oy, r, j0, n, s, kn, kt, a, b, c, bb, cs, False, False, False, False)
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
@@ -209,8 +124,6 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
     um, u0, up_, vm, v0, vp, up2, uq2, vp2, vq2 = _views(cx, cy, r, rr, j0, n, s, up)
     exs, eys = ex[j0:j0 + n], ey[j0:j0 + n]
     ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
-    one = like(1, bb)
-    damp = bb if damped else one
     ds = 0
     ks = 0
     es = 0
@@ -218,8 +131,8 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
         fx, fy = _edge_force(zx, zy, xm, x0, xp, ym, y0, yp, xp_, xq_, yp_, yq_, k, kn, kt, a, b, c)
         ux, uy = u0[k], v0[k]
         qx, qy = ox[k], oy[k]
-        nx = ux + (damp * (ux - qx) + (fx + cf * (exs[k] + gx)))
-        ny = uy + (damp * (uy - qy) + (fy + cf * (eys[k] + gy)))
+        nx = ux + (bb * (ux - qx) + (fx + cf * (exs[k] + gx)))
+        ny = uy + (bb * (uy - qy) + (fy + cf * (eys[k] + gy)))
         ox[k] = nx
         oy[k] = ny
         if drag or energy:
@@ -262,10 +175,9 @@ def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, f
     bb = K[blk, K_DAMP]
     ux, uy = cx[r, j], cy[r, j]
     gx, gy = masked_force(zx, zy, r, j, s, K, blk, mask)
-    damp = bb if damped else like(1, bb)
     qx, qy = px[r, j], py[r, j]
-    nx = ux + (damp * (ux - qx) + (gx + cf * fx))
-    ny = uy + (damp * (uy - qy) + (gy + cf * fy))
+    nx = ux + (bb * (ux - qx) + (gx + cf * fx))
+    ny = uy + (bb * (uy - qy) + (gy + cf * fy))
     px[r, j] = nx
     py[r, j] = ny
     if not (drag or energy):
