@@ -177,7 +177,8 @@ def bound(r: dict) -> float:
 
 def transition_figure(rs, img, source):
     """L_trans / L_c against S beside Andrews' f(S) and its factor-1.5 band; open triangles: no transition
-    before the bound (a lower bound); the nucleation zone's half-width as a dash."""
+    before the bound (a lower bound); the nucleation zone's half-width as a dash; crosses: the zone-edge
+    reading (``L_zone``) where it differs from L_trans."""
     fig, ax = andrews_axes(1.6)
     styles = {"weakening_andrews": ("tab:blue", "forced, main sweep"),
               "weakening_andrews_nucleation": ("tab:orange", "nucleation controls"),
@@ -190,6 +191,8 @@ def transition_figure(rs, img, source):
             if hit:
                 ax.plot([r["S"] for r in hit], [r["L_trans"] / r["L_c"] for r in hit], mk, color=c,
                         mfc="none" if kind == "time" else c, label=f"{label}, {kind}")
+        moved = [r for r in mine if np.isfinite(r["L_zone"]) and r["L_zone"] != r["L_trans"]]
+        ax.plot([r["S"] for r in moved], [r["L_zone"] / r["L_c"] for r in moved], "x", color=c, ms=5)
         miss = [r for r in mine if not np.isfinite(r["L_trans"])]
         ax.plot([r["S"] for r in miss], [bound(r) / r["L_c"] for r in miss], "^", color=c, mfc="none")
         ax.plot([r["S"] for r in mine], [r["nucleation_over_Lc"] for r in mine], "_", color=c, ms=9)
@@ -199,7 +202,8 @@ def transition_figure(rs, img, source):
     ax.legend(fontsize=6)
     ax.set_title("supershear transition, slip-weakening interface, matched pair\n"
                  "^: none before the reflected wave, the room or the uniform prestress's end (a lower bound)\n"
-                 "-: the nucleation zone's half-width; squares: time-weakening nucleation", fontsize=7)
+                 "-: the zone's half-width; squares: time-weakening nucleation; x: read beyond the zone's edge",
+                 fontsize=7)
     return save(fig, img, "weakening_andrews_transition", source)
 
 
