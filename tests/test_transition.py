@@ -77,15 +77,21 @@ TINY = {"lattice.top_rows": 46, "lattice.top_cols": 160, "lattice.bottom_rows": 
         "output.fields": "interface"}
 
 
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """The TINY run (a forced nucleation at S = 0.3), run once for the tests that read it."""
+    _, out = run_small(tmp_path_factory.mktemp("tiny"), "tiny", **TINY)
+    return Run(str(out))
+
+
 @pytest.mark.timeout(300)
-def test_a_lattice_rupture_times_agree_with_its_frames_and_turn_supershear(tmp_path):
+def test_a_lattice_rupture_times_agree_with_its_frames_and_turn_supershear(tiny):
     """On a real run: each site's first break after the hold (the events' exact steps) lies within the frame
     interval before the first frame that shows it broken (over the sites the fronts cross between the zone
     and the strong edges); both sides of the bilateral rupture give the same
     L_trans to a site; and a line through the frames' arrivals from the zone's edge to 60 a runs above c_s,
     as the events' windows do (to within the frames' resolution)."""
-    _, out = run_small(tmp_path, "tiny", **TINY)
-    run = Run(str(out))
+    run = tiny
     held = float(run.attrs["prestress_time"])
     times = T.rupture_times(run, held)
     it = run.interface
@@ -106,6 +112,46 @@ def test_a_lattice_rupture_times_agree_with_its_frames_and_turn_supershear(tmp_p
     _, tf = T.side(seen, 80.0, 1, 160.0)
     keep = (r > 8.0) & (r < 60.0)
     assert np.polyfit(tf[keep], r[keep], 1)[0] > c_s
+
+
+def test_the_rupture_runs_free_where_it_first_breaks_a_site_before_the_forcing_reaches_it():
+    """A forced front at 0.5 c_r; the rupture lags it by 2 a/c_r to r = 10 a, then runs at c_r by itself: it
+    breaks a site before the forcing arrives from r = 12 a on (22 + (r - 10) < 2 r), found at the first site
+    past it; a zone that ends before that gives its own edge."""
+    r = np.arange(100) + 0.5
+    forced = r / 0.5
+    t = np.where(r < 10.0, forced + 2.0, 22.0 + (r - 10.0))
+    assert T.free_start(r, t, forced, half=30.0) == 12.5
+    assert T.free_start(r, t, forced, half=12.0) == 12.0
+    assert T.free_start(r, forced + 2.0, forced, half=30.0) == 30.0     # never ahead: the zone's edge
+
+
+@pytest.mark.timeout(300)
+def test_study_1_reads_the_transition_beyond_where_the_lattice_rupture_outran_its_forcing(tiny):
+    """On the real run, study 1's reading (``andrews.remeasure``): the hypocentre's site breaks after the
+    forcing reached it and within the forcing's weakening time (nucleation.duration), on the clock the
+    reading puts the forcing on (the nucleation's start from the scene and the held prestress's time, the
+    first break as t = 0); every site before a side's free start broke no earlier than the forcing reached
+    it, the one at it earlier; the free start lies within the zone, and L_trans read from it is at most the
+    zone-edge reading (a daughter or a supershear stretch beyond the edge is one beyond the free start too)."""
+    from parslip.studies.weakening import andrews
+    run = tiny
+    m = andrews.remeasure(andrews.measure(run), run)
+    g, sc, l = m["geometry"], run.scene, 160.0
+    times = T.rupture_times(run, float(run.attrs["prestress_time"]))
+    start = float(run.attrs["prestress_time"]) + float(sc["drive.prestress.settle"]) \
+        + float(sc["interface.nucleation.start"])
+    origin, v = (start - np.nanmin(times)) * l, float(sc["interface.nucleation.speed"])
+    weaken = float(sc["interface.nucleation.duration"]) * l
+    for side in m["sides"]:
+        r, t = side["r"], side["t"]
+        assert origin + r[0] / v <= t[0] <= origin + r[0] / v + weaken + DT
+        before = r < side["free"]
+        assert np.all(t[before] >= origin + r[before] / v)
+        assert side["free"] <= g["half"]
+        if side["free"] < g["half"]:
+            assert t[r == side["free"]][0] < origin + side["free"] / v
+    assert math.isfinite(m["L_trans"]) and m["L_trans"] <= m["L_zone"]
 
 
 def test_the_tables_write_numpy_floats_as_numbers(tmp_path):

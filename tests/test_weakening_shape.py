@@ -103,15 +103,3 @@ def test_the_reflected_wave_meets_a_tip_at_c_r_at_study_1s_reflection_distance()
     assert shape.reflection_time(D, h, c_l) == pytest.approx(D)
     assert shape.reflection_time(0.0, h, c_l) == pytest.approx(2 * h / c_l)
     assert shape.reflection_time(D / 2, h, c_l) > D / 2        # a tip at c_r gets there before the wave
-
-
-def test_the_rupture_runs_free_where_it_first_breaks_a_site_before_the_forcing_reaches_it():
-    """A forced front at 0.5 c_r; the rupture lags it by 2 a/c_r to r = 10 a, then runs at c_r by itself: it
-    breaks a site before the forcing arrives from r = 12 a on (22 + (r - 10) < 2 r), found at the first site
-    past it; a zone that ends before that gives its own edge."""
-    r = np.arange(100) + 0.5
-    forced = r / 0.5
-    t = np.where(r < 10.0, forced + 2.0, 22.0 + (r - 10.0))
-    assert shape.free_start(r, t, forced, half=30.0) == 12.5
-    assert shape.free_start(r, t, forced, half=12.0) == 12.0
-    assert shape.free_start(r, forced + 2.0, forced, half=30.0) == 30.0     # never ahead: the zone's edge

@@ -10,6 +10,8 @@ daughter_birth(r, t, start)      the birth of the first daughter beyond ``start`
                                  before a site nearer the hypocentre, followed to the earliest break of its
                                  cluster (where the daughter was born); None when every site broke after all
                                  nearer ones
+free_start(r, t, forced, half)   where the rupture first broke a site before its forced front reached it
+                                 (a; ``half``, the zone's edge, when it never did)
 first_supershear(r, t, c_s, ..)  the first distance from which the front runs above c_s to its end
 transition_distance(r, t, ..)    L_trans: the daughter's birth, else the first supershear distance, with how
                                  it was found and its resolution
@@ -84,6 +86,17 @@ def daughter_birth(r: np.ndarray, t: np.ndarray, start: float, min_lead: float =
             k += 1
         return {"r": float(r[k]), "t": float(t[k]), "lead": float(latest[j - 1] - t[k]), "index": int(k)}
     return None
+
+
+def free_start(r: np.ndarray, t: np.ndarray, forced: np.ndarray, half: float) -> float:
+    """Where the rupture ran ahead of its forced nucleation (a): the first r_i < ``half`` (the zone's
+    half-width) with t_i < forced_i, a site that broke before the forcing reached it (``forced``: the
+    forcing's arrival at each r, on the clock of ``t``; the forcing then takes nucleation.duration to weaken a
+    site, so a site broken before it arrived was broken by the rupture alone); ``half`` when none did (the
+    rupture left the zone by itself only at its edge).  Beyond it the rupture runs by itself: a transition
+    there is the rupture's, not the zone's."""
+    ahead = np.flatnonzero((r < half) & (t < forced))
+    return float(r[ahead[0]]) if len(ahead) else float(half)
 
 
 def _line_speed(r: np.ndarray, t: np.ndarray) -> float:

@@ -5,7 +5,9 @@ rupture at the contact's centre (``interface.nucleation``).  S, L_c, Lambda are 
 ``rupture.law_scales``, the law at rest under F_N, tau_0 the held prestress); L_andrews = f(S) L_c with Xia et
 al.'s f(S) = 9.8 (1.77 - S)^-3.  L_trans is measured on each side from the hypocentre (the zone's centre) by
 ``analysis.transition`` on the rupture-time field after the prestress was held: the daughter's birth, else the
-first distance from which the tip runs above c_s to its end; the table gives the mean of the two sides.  A
+first distance from which the tip runs above c_s to its end, either beyond where the rupture first broke a site
+before its forced front reached it (``remeasure``: ``free``, at most the zone's half-width; the time-weakening
+zone's edge); the table gives the mean of the two sides, and the reading beyond the zone's edge as ``L_zone``.  A
 transition beyond the distance at which a wave reflected from the top or bottom reaches the tip
 (2 h / sqrt(c_l^2 - c_r^2) for a tip at c_r) is not counted.  Lengths in a, speeds in c_r.
 """
@@ -27,9 +29,9 @@ from ..cracks.supershear import andrews_axes
 from . import points, provenance, sweeps, write
 
 COLS = ["sweep", "point", "S", "L_c", "L_trans", "L_andrews", "nucleation", "nucleation_over_Lc", "ratio",
-        "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "v_exit", "reach", "room", "reflection", "uniform",
-        "S_path", "Lambda", "tau_p", "tau_0", "Gamma", "kx", "softening", "heal_time", "zeta", "damping", "hold",
-        "bottom_kn"]
+        "trans_by", "resolution", "L_trans_plus", "L_trans_minus", "free", "L_zone", "v_exit", "reach", "room",
+        "reflection", "uniform", "S_path", "Lambda", "tau_p", "tau_0", "Gamma", "kx", "softening", "heal_time",
+        "zeta", "damping", "hold", "bottom_kn"]
 
 
 def scales(run) -> dict:
@@ -51,13 +53,20 @@ def geometry(run) -> dict:
             "reflection": 2.0 * h / math.sqrt(wave_speeds(run)["c_l"] ** 2 - 1.0), "l": l}
 
 
+def nucleation_start(run) -> float:
+    """When the nucleation started (l/c_r): the held prestress reached, settled, and the nucleation's delay
+    passed (NaN when the prestress was never reached)."""
+    sc = run.scene
+    return float(run.attrs["prestress_time"]) + float(sc["drive.prestress.settle"]) \
+        + float(sc["interface.nucleation.start"])
+
+
 def path_prestress(run, g: dict, within: float, tol: float = 0.05) -> tuple[float, float]:
     """The prestress the rupture ran into, in the last frame before the nucleation started: the mean shear
     traction (rho c_r^2) over the sites within ``within`` (a) of the centre, and how far from the centre (a,
     the nearer side) the traction stays within ``tol`` of its mean over the central L_c-wide stretch (the free
     edges of the finite block unload the contact near them)."""
-    start = float(run.attrs["prestress_time"]) + float(run.scene["drive.prestress.settle"]) \
-        + float(run.scene["interface.nucleation.start"])
+    start = nucleation_start(run)
     t = np.asarray(run.interface["t"], float)
     k = max(int(np.searchsorted(t, start)) - 1, 0)
     sxy = np.asarray(run.interface["sxy"])[k]
@@ -104,19 +113,47 @@ def measure(run, cut: bool = False) -> dict:
             "S_path_tau": tau, "uniform": uniform}
 
 
+def remeasure(m: dict, run) -> dict:
+    """``measure``'s result with each side's L_trans read beyond where the rupture first ran ahead of the
+    forced front (``transition.free_start``) rather than beyond the zone's edge, which keeps a zone widened
+    past where the rupture already runs by itself from moving L_trans without changing the run.  The old
+    reading is kept as "L_zone", the mean start as "free" (a).  The forcing reaches r at r /
+    nucleation.speed after the nucleation's start; a time-weakening zone weakens all at once, so its
+    start stays the zone's edge."""
+    g, sc = m["geometry"], run.scene
+    c_s = wave_speeds(run)["c_s"]
+    l, v = g["l"], float(sc["interface.nucleation.speed"])
+    times = transition.rupture_times(run, float(run.attrs["prestress_time"]))
+    origin = (nucleation_start(run) - np.nanmin(times)) * l if np.isfinite(times).any() else 0.0   # a/c_r
+    sides, Ls = [], []
+    for side in m["sides"]:
+        r, t = side["r"], side["t"]
+        free = transition.free_start(r, t, origin + r / v, g["half"]) if v > 0 else g["half"]
+        got = {**side, **transition.transition_distance(r, t, c_s, free), "free": free,
+               "v_exit": side["v_exit"]}
+        sides.append(got)
+        Ls.append(_counted(got, g))
+    L = float(np.mean(Ls)) if all(math.isfinite(x) for x in Ls) else math.nan
+    bys = {s["by"] for s, x in zip(sides, Ls) if math.isfinite(x)}
+    return {**m, "sides": sides, "L_sides": Ls, "L_trans": L, "L_zone": m["L_trans"],
+            "by": " / ".join(sorted(bys)) if math.isfinite(L) else None,
+            "resolution": max(s["resolution"] for s in sides) if math.isfinite(L) else math.nan,
+            "free": float(np.mean([s["free"] for s in sides]))}
+
+
 def _row(sweep: str, row: dict, run) -> dict:
     out = {"sweep": sweep, "point": row["point"], "scene": row["scene"], "commit": row["commit"]}
     if run is None:
         return {**out, **{c: math.nan for c in COLS if c not in out}}
-    m = measure(run)
+    m = remeasure(measure(run), run)
     sc, g, sc_ = m["scales"], m["geometry"], run.scene
     tp, tr, tau = sc["tau_p"], sc["tau_r"], m["S_path_tau"]
     L_andrews = m["L_andrews"]
     return {**out, "S": sc["S"], "L_c": sc["L_c"], "L_trans": m["L_trans"], "L_andrews": L_andrews,
             "nucleation": sc_["interface.nucleation.kind"], "nucleation_over_Lc": g["half"] / sc["L_c"],
             "ratio": m["L_trans"] / L_andrews, "trans_by": m["by"], "resolution": m["resolution"],
-            "L_trans_plus": m["L_sides"][0], "L_trans_minus": m["L_sides"][1],
-            "v_exit": float(np.nanmean([s["v_exit"] for s in m["sides"]])),
+            "L_trans_plus": m["L_sides"][0], "L_trans_minus": m["L_sides"][1], "free": m["free"],
+            "L_zone": m["L_zone"], "v_exit": float(np.nanmean([s["v_exit"] for s in m["sides"]])),
             "reach": min(s["reach"] for s in m["sides"]), "room": g["room"], "reflection": g["reflection"],
             "uniform": m["uniform"],
             "S_path": (tp - tau) / (tau - tr), "Lambda": sc["Lambda"], "tau_p": tp, "tau_0": sc["tau_0"],
@@ -140,7 +177,8 @@ def bound(r: dict) -> float:
 
 def transition_figure(rs, img, source):
     """L_trans / L_c against S beside Andrews' f(S) and its factor-1.5 band; open triangles: no transition
-    before the bound (a lower bound); the nucleation zone's half-width as a dash."""
+    before the bound (a lower bound); the nucleation zone's half-width as a dash; crosses: the zone-edge
+    reading (``L_zone``) where it differs from L_trans."""
     fig, ax = andrews_axes(1.6)
     styles = {"weakening_andrews": ("tab:blue", "forced, main sweep"),
               "weakening_andrews_nucleation": ("tab:orange", "nucleation controls"),
@@ -153,6 +191,8 @@ def transition_figure(rs, img, source):
             if hit:
                 ax.plot([r["S"] for r in hit], [r["L_trans"] / r["L_c"] for r in hit], mk, color=c,
                         mfc="none" if kind == "time" else c, label=f"{label}, {kind}")
+        moved = [r for r in mine if np.isfinite(r["L_zone"]) and r["L_zone"] != r["L_trans"]]
+        ax.plot([r["S"] for r in moved], [r["L_zone"] / r["L_c"] for r in moved], "x", color=c, ms=5)
         miss = [r for r in mine if not np.isfinite(r["L_trans"])]
         ax.plot([r["S"] for r in miss], [bound(r) / r["L_c"] for r in miss], "^", color=c, mfc="none")
         ax.plot([r["S"] for r in mine], [r["nucleation_over_Lc"] for r in mine], "_", color=c, ms=9)
@@ -162,7 +202,8 @@ def transition_figure(rs, img, source):
     ax.legend(fontsize=6)
     ax.set_title("supershear transition, slip-weakening interface, matched pair\n"
                  "^: none before the reflected wave, the room or the uniform prestress's end (a lower bound)\n"
-                 "-: the nucleation zone's half-width; squares: time-weakening nucleation", fontsize=7)
+                 "-: the zone's half-width; squares: time-weakening nucleation; x: read beyond the zone's edge",
+                 fontsize=7)
     return save(fig, img, "weakening_andrews_transition", source)
 
 

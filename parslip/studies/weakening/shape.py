@@ -108,9 +108,7 @@ def early_breaks(run) -> int:
     """How many sites broke before the nucleation started (the held prestress reached, settled and the
     nucleation's delay passed); every site that broke when the prestress was never reached.  Such a run's
     rupture did not start from the nucleation: it has no L_trans."""
-    sc = run.scene
-    start = float(run.attrs["prestress_time"]) + float(sc["drive.prestress.settle"]) \
-        + float(sc["interface.nucleation.start"])
+    start = andrews.nucleation_start(run)
     ev = run.interface["events"]
     brk = np.asarray(ev["kind"]) == EVENT_BREAK
     t = np.asarray(ev["time"], float)[brk]
@@ -118,49 +116,11 @@ def early_breaks(run) -> int:
     return int(len(np.unique(np.asarray(ev["site"])[brk][early])))
 
 
-def free_start(r: np.ndarray, t: np.ndarray, forced: np.ndarray, half: float) -> float:
-    """Where the rupture ran ahead of its forced nucleation (a): the first site within the zone's half-width
-    ``half`` that broke before the forcing reached it (``forced``: the forcing's arrival at each r, on the
-    clock of ``t``; the forcing then takes nucleation.duration to weaken a site, so a site broken before it
-    arrived was broken by the rupture alone); ``half`` when none did (the rupture left the zone by itself only
-    at its edge).  Beyond it the rupture runs by itself: a transition there is the rupture's, not the zone's."""
-    ahead = np.flatnonzero((r < half) & (t < forced))
-    return float(r[ahead[0]]) if len(ahead) else float(half)
-
-
-def remeasure(m: dict, run) -> dict:
-    """``andrews.measure``'s result with each side's L_trans read beyond where the rupture ran ahead of the
-    forced front (``free_start``) rather than beyond the zone's edge; study 1's reading kept as "L_zone".
-    The forcing reaches r at r / nucleation.speed after the nucleation's start (a time-weakening zone, all at
-    once: the zone's edge stays the start)."""
-    g, sc = m["geometry"], run.scene
-    c_s = wave_speeds(run)["c_s"]
-    l, v = g["l"], float(sc["interface.nucleation.speed"])
-    times = transition.rupture_times(run, float(run.attrs["prestress_time"]))
-    start = float(run.attrs["prestress_time"]) + float(sc["drive.prestress.settle"]) \
-        + float(sc["interface.nucleation.start"])
-    origin = (start - np.nanmin(times)) * l if np.isfinite(times).any() else 0.0   # the start, a/c_r from t = 0
-    sides, Ls = [], []
-    for side in m["sides"]:
-        r, t = side["r"], side["t"]
-        free = free_start(r, t, origin + r / v, g["half"]) if v > 0 else g["half"]
-        got = {**side, **transition.transition_distance(r, t, c_s, free), "free": free,
-               "v_exit": side["v_exit"]}
-        sides.append(got)
-        Ls.append(andrews._counted(got, g))
-    L = float(np.mean(Ls)) if all(math.isfinite(x) for x in Ls) else math.nan
-    bys = {s["by"] for s, x in zip(sides, Ls) if math.isfinite(x)}
-    return {**m, "sides": sides, "L_sides": Ls, "L_trans": L, "L_zone": m["L_trans"],
-            "by": " / ".join(sorted(bys)) if math.isfinite(L) else None,
-            "resolution": max(s["resolution"] for s in sides) if math.isfinite(L) else math.nan,
-            "free": float(np.mean([s["free"] for s in sides]))}
-
-
 def _row(sweep: str, row: dict, run) -> dict:
     out = {"sweep": sweep, "point": row["point"], "scene": row["scene"], "commit": row["commit"]}
     if run is None:
         return {**out, **{c: math.nan for c in COLS if c not in out}}
-    m = remeasure(andrews.measure(run, cut=True), run)
+    m = andrews.remeasure(andrews.measure(run, cut=True), run)
     early = early_breaks(run)
     if early:                                      # a rupture the nucleation did not start: no L_trans
         m = {**m, "L_trans": math.nan, "L_sides": [math.nan, math.nan], "L_zone": math.nan,
