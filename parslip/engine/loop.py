@@ -310,8 +310,9 @@ def _nodes(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, 
 # One call per phase: the loop over the two blocks and the row and node kernels compiled into one function.  A
 # call passes every array descriptor of its arguments (a few hundred words): four calls of ``_rows`` and
 # ``_nodes`` per phase cost about as much as updating a few hundred nodes.  Not inlined into ``_step``, which
-# calls it twice: numba would type, lower and optimise the kernels once for each place.  Compiled with the
-# kernels' flags (``contract``): numba inlines ``_rows`` and ``_nodes`` with their caller's.
+# calls it twice: numba would type, lower and optimise the kernels once for each place.  The phase arrives as a
+# variable (``np.int64(EARLY)``), not a constant: a constant compiled a version per phase (60 s of compile, not 47).
+# Compiled with the kernels' flags (``contract``): numba inlines ``_rows`` and ``_nodes`` with their caller's.
 @njit(cache=True, _nrt=False, fastmath={'contract'})
 def _phase(phase, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy):
     """The tasks of one phase (EARLY, LATE) of both blocks.  In the LATE phase MPI is given a chance to
@@ -448,11 +449,11 @@ def _step(n, n1, cur, nxt, z, plan, sched, K, prm, iface, drive, diag, bud):
         rate_field(cur.tx, cur.ty, nxt.tx, nxt.ty, z.tx, z.ty, K[1, K_RATE])
         src = z
     t1 = now_ns(clk) if timed else 0
-    _tasks(EARLY, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
+    _tasks(np.int64(EARLY), sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
     t2 = now_ns(clk) if timed else 0
     err = post(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     t3 = now_ns(clk) if timed else 0
-    _tasks(LATE, sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
+    _tasks(np.int64(LATE), sched, cur, src, nxt, K, prm, iface, plan, drive, drive_on, shift, gy, bud, energy)
     t4 = now_ns(clk) if timed else 0
     err |= complete(plan, nxt.bx, nxt.by, nxt.tx, nxt.ty, iface.bonds)
     if timed:
