@@ -618,6 +618,12 @@ class Simulation:
             cause += ("; or, at this interface site: a site whose bond broke feels no contact "
                       "(interface.contact = 0), so under F_N the block can sink into the substrate until a site "
                       f"meets it; rerun with a contact, e.g. --set interface.contact={st.law.ky:g}")
+        if lat.has_interface and site_row and st.law.contact > 0:
+            # Seen on study 5 once the contact slid whole: the contact's switches feed a vibration as fast as
+            # the damping takes it; a smaller time.safety only raises the speed this check trips at.
+            cause = ("a contact that slides (interface.contact), whose switches feed the interface's vibration "
+                     "at any time step (a smaller time.safety only hides it: docs/guide/interfaces.md, 'Friction "
+                     "on the contact'); or " + cause)
         if f[L.L_BITS] & L.FLAG_NONFINITE:
             return (f"state became non-finite at step {step} (t = {t:.4g} l/c_r from drive start) at {node}; "
                     f"likely cause: {cause}")
