@@ -212,16 +212,23 @@ def _fitted(rows: list[dict], arrests: list[dict], img: str, tables: str) -> tup
     return write(rows, RUN_COLS, os.path.join(tables, "cracks_precursors.csv")), source
 
 
-def tabulate(runs: str, img: str, tables: str) -> str:
-    """Both tables and both figures (module docstring); returns the Markdown of the runs' table."""
+def gather(dirs: list[str], read) -> tuple[list[dict], list[dict]]:
+    """The runs' rows and their precursors' rows over the sweep folders ``dirs``: ``read(row, run)`` gives a run's
+    row and its precursors (each study's ``run_arrests``); a point without a run is skipped."""
     rows, arrests = [], []
-    for d in sweeps(runs, "precursors"):
+    for d in dirs:
         for row, run in points(d):
             if run is None:
                 continue
-            r, a = run_arrests({**row, "sweep": os.path.basename(d)}, run)
+            r, a = read({**row, "sweep": os.path.basename(d)}, run)
             rows.append(r)
             arrests += a
+    return rows, arrests
+
+
+def tabulate(runs: str, img: str, tables: str) -> str:
+    """Both tables and both figures (module docstring); returns the Markdown of the runs' table."""
+    rows, arrests = gather(sweeps(runs, "precursors"), run_arrests)
     table.write_csv(os.path.join(tables, "cracks_precursors_arrests.csv"), ARREST_COLS + ["scene", "commit"],
                     arrests)
     md, source = _fitted(rows, arrests, img, tables)

@@ -40,8 +40,8 @@ from parslip.analysis.fronts import wave_speeds
 from parslip.model.physics import ROW_HEIGHT
 from parslip.plot.figures import pyplot, save
 
-from ..cracks.precursors import _mu_at, height_of, line_fit, max_gap
-from . import points, provenance, sweeps, write
+from ..cracks.precursors import _mu_at, gather, height_of, line_fit, max_gap
+from . import provenance, sweeps, write
 from .andrews import scales
 
 # The readings the runs depart from the defaults in, named as columns so that the tables declare them.
@@ -192,14 +192,7 @@ def prediction_figure(arrests: list[dict], img: str, source: dict):
 
 def tabulate(runs: str, img: str, tables: str) -> str:
     """Both tables and both figures (module docstring); returns the Markdown of the runs' table."""
-    rows, arrests = [], []
-    for d in sweeps(runs, "precursors"):
-        for row, run in points(d):
-            if run is None:
-                continue
-            r, a = run_arrests({**row, "sweep": os.path.basename(d)}, run)
-            rows.append(r)
-            arrests += a
+    rows, arrests = gather(sweeps(runs, "precursors"), run_arrests)
     fit = load_fits(arrests)
     nan = {"slope": math.nan, "intercept": math.nan, "r2": math.nan, "n_fit": 0}
     for r in rows:
