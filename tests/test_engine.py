@@ -289,7 +289,8 @@ def test_the_memory_prediction_counts_the_frame_buffer_the_engine_holds(mode, ro
 def test_a_runaway_at_an_interface_site_without_contact_names_the_sinking():
     """A runaway flagged at an interface site of a run without contact names the sinking as a cause (a block
     under F_N whose bonds broke has nothing holding it up; at l = 500 under F_N = 30 that ended a run which
-    completes with a contact), with the command that adds one; in the bulk, or with a contact, it does not."""
+    completes with a contact), with the command that adds one; in the bulk, or with a contact, it does not: with a
+    contact, a site's runaway names the contact's switches."""
     from parslip.engine import loop as L
     from parslip.parallel.layout import PAD
 
@@ -306,4 +307,8 @@ def test_a_runaway_at_an_interface_site_without_contact_names_the_sinking():
     rows = SMALL["lattice.bottom_rows"]
     assert "interface.contact = 0" in message(rows - 1, block=BOTTOM)
     assert "interface.contact" not in message(1)
-    assert "interface.contact" not in message(0, **{"interface.contact": 0.3})
+    # With a contact the site's cause is the contact's switches (docs/guide/interfaces.md), not a missing contact.
+    with_contact = message(0, **{"interface.contact": 0.3})
+    assert "a contact that slides (interface.contact)" in with_contact
+    assert "interface.contact = 0" not in with_contact and "--set interface.contact" not in with_contact
+    assert "a contact that slides" not in message(1, **{"interface.contact": 0.3})
