@@ -248,7 +248,7 @@ class Coefficients:
 
     node_ns            ns per node update of one core (1 / the per-core throughput `parslip bench` measures)
     site_ns            ns per interface site the bond update runs over, beyond its node update
-    segment_ns         ns a row segment costs beyond its nodes (the task, its views, the loop's ends)
+    segment_ns         ns a row costs beyond its nodes (its views, the loop's ends; consecutive rows: one task)
     single_ns          ns per node the loop updates on its own (block edges, short pieces)
     fixed_us           us per step that does not scale (loop overhead, flag checks, the exchange's calls)
     pack_ns_per_value  ns to pack or unpack one halo value (``studies.bench.pack``, measured directly)
@@ -260,7 +260,7 @@ class Coefficients:
     """
     node_ns: float = 1.68
     site_ns: float = 20.0
-    segment_ns: float = 50.0
+    segment_ns: float = 30.0        # 29.8 measured at eb55656 (rows merged into one task)
     single_ns: float = 20.0
     fixed_us: float = 1.0
     pack_ns_per_value: float = 2.5
