@@ -238,7 +238,7 @@ def mpi_post(plan, bx, by, tx, ty, bonds):
     if npeer == 0:
         return 0
     for i in range(npeer):
-        _transfer(plan, i, bx, by, tx, ty, bonds, True)
+        _transfer(plan, i, bx, by, tx, ty, bonds, np.bool_(True))    # a variable: one compiled _transfer
     return mpi.startall(np.int32(2 * npeer), plan.req.ctypes.data)
 
 
@@ -250,5 +250,5 @@ def mpi_complete(plan, bx, by, tx, ty, bonds):
         return 0
     err = mpi.waitall(np.int32(2 * npeer), plan.req.ctypes.data, plan.status.ctypes.data)
     for i in range(npeer):
-        _transfer(plan, i, bx, by, tx, ty, bonds, False)
+        _transfer(plan, i, bx, by, tx, ty, bonds, np.bool_(False))
     return err

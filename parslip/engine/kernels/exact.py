@@ -45,13 +45,6 @@ def _bits(typingctx, x):
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def raw(w):
-    """round(w) + MAGIC_BITS as an int64, for |w| < 2^51: a sum of n of them, less n MAGIC_BITS, is the sum of
-    the rounded values (int64 wraps, and the true sum fits)."""
-    return _bits(w + MAGIC)
-
-
-@njit(cache=True, inline="always", _nrt=False)
 def quant(w):
     """round(w) as an int64, for |w| < 2^51: one float addition and a register move."""
     return _bits(w + MAGIC) - MAGIC_BITS

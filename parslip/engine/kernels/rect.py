@@ -12,24 +12,54 @@ row, about 55 ns when each row was a task of its own (``studies.bench.rows``), w
 the checks the vectorised loop makes that they do not overlap what it writes.  Row r0 + i has shift
 s = s0 ^ (i & 1): the rows' x offsets alternate.
 """
+import numpy as np
 from numba import njit
 
-from .exact import MAGIC_BITS, raw
-from .stencil import K_A, K_B, K_C, K_DAMP, K_N, K_T, _full, budget_shares
+from .exact import quant
+from .stencil import K_A, K_B, K_C, K_DAMP, K_N, K_T, _full
 
 
 @njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
-def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, rated, drag, energy):
-    """The loop of ``rect_full`` for constant (rated, drag, energy): the compiler keeps one branch-free loop per
-    combination.  Without the bonds' dashpots z is u, so u is read once, from z."""
+def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, rated):
+    """The loop of ``rect_full`` in a step that sums nothing, for a constant ``rated``: one branch-free,
+    vectorised loop each.  Without the bonds' dashpots z is u, so u is read once, from z."""
+    for i in range(rows):
+        r = r0 + i
+        s = s0 ^ (i & 1)
+        # Row r from column j0 - 1 (left, centre, right at k, k + 1, k + 2), the rows above and below from
+        # j0 - 1 + s (up-left and up-right at k, k + 1; down-left and down-right likewise).
+        xh, yh = zx[r, j0 - 1:j0 + 1 + n], zy[r, j0 - 1:j0 + 1 + n]
+        xu, yu = zx[r + 1, j0 - 1 + s:j0 + s + n], zy[r + 1, j0 - 1 + s:j0 + s + n]
+        xd, yd = zx[r - 1, j0 - 1 + s:j0 + s + n], zy[r - 1, j0 - 1 + s:j0 + s + n]
+        ch, dh = cx[r, j0 - 1:j0 + 1 + n], cy[r, j0 - 1:j0 + 1 + n]
+        ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
+        for k in range(n):
+            fx, fy = _full(xh[k + 1], yh[k + 1], xh[k], xh[k + 2], yh[k], yh[k + 2], xu[k + 1], xd[k], xu[k],
+                           xd[k + 1], yu[k + 1], yd[k], yu[k], yd[k + 1], kn, kt, a, b, c)
+            if rated:
+                ux, uy = ch[k + 1], dh[k + 1]
+            else:
+                ux, uy = xh[k + 1], yh[k + 1]
+            # B = 1 exactly without the body drag: 1 (u - q) + f, even contracted to fma(1, u - q, f), rounds as
+            # (u - q) + f, so the undamped loops need no version of their own.
+            qx, qy = ox[k], oy[k]
+            ox[k] = ux + (bb * (ux - qx) + fx)
+            oy[k] = uy + (bb * (uy - qy) + fy)
+
+
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
+def _rect_sums(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, rated, wd, we):
+    """The loop of ``rect_full`` in a step that sums (a frame's, or every step with ``output.energy =
+    "checked"``), for a constant ``rated``: the same update, and the exact shares of ``stencil.budget_shares``
+    weighed by wd (the body drag's) and we (the frame's kinetic and elastic energy), each 0 or 1, so one loop
+    serves every such step without a branch.  With the bonds' dashpots the elastic share takes C F(u) from u
+    itself, not from z."""
     ds = 0
     ks = 0
     es = 0
     for i in range(rows):
         r = r0 + i
         s = s0 ^ (i & 1)
-        # Row r from column j0 - 1 (left, centre, right at k, k + 1, k + 2), the rows above and below from
-        # j0 - 1 + s (up-left and up-right at k, k + 1; down-left and down-right likewise).
         xh, yh = zx[r, j0 - 1:j0 + 1 + n], zy[r, j0 - 1:j0 + 1 + n]
         xu, yu = zx[r + 1, j0 - 1 + s:j0 + s + n], zy[r + 1, j0 - 1 + s:j0 + s + n]
         xd, yd = zx[r - 1, j0 - 1 + s:j0 + s + n], zy[r - 1, j0 - 1 + s:j0 + s + n]
@@ -44,27 +74,20 @@ def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb,
                 ux, uy = ch[k + 1], dh[k + 1]
             else:
                 ux, uy = xh[k + 1], yh[k + 1]
-            # B = 1 exactly without the body drag: 1 (u - q) + f, even contracted to fma(1, u - q, f), rounds as
-            # (u - q) + f, so the undamped loops need no version of their own.
             qx, qy = ox[k], oy[k]
             nx = ux + (bb * (ux - qx) + fx)
             ny = uy + (bb * (uy - qy) + fy)
             ox[k] = nx
             oy[k] = ny
-            if drag and not energy:         # a step of "checked": the body drag alone, its offset taken once below
-                dx, dy = float(nx) - float(qx), float(ny) - float(qy)
-                ds += raw((dx * dx + dy * dy) * cs[0])
-            elif drag or energy:
-                gx, gy = fx, fy
-                if energy and rated:
-                    gx, gy = _full(ux, uy, ch[k], ch[k + 2], dh[k], dh[k + 2], cu[k + 1], cd[k], cu[k], cd[k + 1],
-                                   du[k + 1], dd[k], du[k], dd[k + 1], kn, kt, a, b, c)
-                d, kk, e = budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy)
-                ds += d
-                ks += kk
-                es += e
-    if drag and not energy:
-        ds -= rows * n * MAGIC_BITS
+            gx, gy = fx, fy
+            if rated:
+                gx, gy = _full(ux, uy, ch[k], ch[k + 2], dh[k], dh[k + 2], cu[k + 1], cd[k], cu[k], cd[k + 1],
+                               du[k + 1], dd[k], du[k], dd[k + 1], kn, kt, a, b, c)
+            dx, dy = float(nx) - float(qx), float(ny) - float(qy)
+            vx, vy = float(nx) - float(ux), float(ny) - float(uy)
+            ds += wd * quant((dx * dx + dy * dy) * cs[0])
+            ks += we * quant((vx * vx + vy * vy) * cs[2])
+            es += we * quant((float(nx) * float(gx) + float(ny) * float(gy)) * cs[3])
     return ds, ks, es
 
 
@@ -74,16 +97,21 @@ def rect_full(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, K, blk, damped, drag,
     each row as a block's interior row.  Writes u(t+dt) into px, py; returns the rectangle's exact shares of the
     budget (damping, kinetic, elastic)."""
     kn, kt, a, b, c, bb = K[blk, K_N], K[blk, K_T], K[blk, K_A], K[blk, K_B], K[blk, K_C], K[blk, K_DAMP]
-    # One call per combination of the flags, each a loop without branches; the bonds' dashpots and the body
-    # drag never act together (``damped`` only describes the step: B is a value, 1 without the drag).
+    # Four loops: the steps that sum nothing (all but a frame's, unless output.energy = "checked") run one of
+    # two without sums, the others one of two with the sums weighed by 0 or 1 (as the flags say), each
+    # branch-free and vectorised.  A loop per combination of (rated, drag, energy) made six, at 1.6 s of
+    # compile each (push on 1 rank, 2026-11-27); weighing the sums saves two of them, at no measurable cost
+    # per step.  A single loop with sums, reading u and z apart, compares more addresses than the vectoriser
+    # checks at run time, and ran scalar: 28 % slower per step on the README's main job.  The update is the
+    # same expression in each, so its bits do not depend on which loop ran.  The bonds' dashpots and the
+    # body drag never act together (``damped`` only describes the step: B is a value, 1 without the drag).
+    if drag or energy:
+        wd, we = np.int64(drag), np.int64(energy)
+        if rated:
+            return _rect_sums(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, True, wd, we)
+        return _rect_sums(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, wd, we)
     if rated:
-        if energy:
-            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, True, False, True)
-        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, True, False, False)
-    if drag:
-        if energy:
-            return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, True, True)
-        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, True, False)
-    if energy:
-        return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, False, True)
-    return _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, cs, False, False, False)
+        _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, True)
+    else:
+        _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, False)
+    return 0, 0, 0
