@@ -171,7 +171,7 @@ def _flag(flags, bit, step, block, row, col, value):
     flags[L_BITS] |= bit
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, forceinline=True)
 def _drive(cx, cy, zx, zy, px, py, r, j, s, mask, K, blk, drive, drive_on, shift, prm, bud, energy):
     """Drive node (r, j) of the driven face, once it has had its free update u(n+1) in ``px``.
 

@@ -91,7 +91,7 @@ def _rect_sums(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb,
     return ds, ks, es
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
 def rect_full(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, K, blk, damped, drag, rated, energy, cs):
     """Interior rows r0 .. r0 + rows - 1 over columns [j0, j0 + n): all six bonds, no external force, as
     each row as a block's interior row.  Writes u(t+dt) into px, py; returns the rectangle's exact shares of the

@@ -62,7 +62,7 @@ def _full(ux, uy, xm, xp, ym, yp, xur, xdl, xul, xdr, yur, ydl, yul, ydr, kn, kt
             kt * hy + b * (qpx - qqx) + c * (qpy + qqy))
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
 def budget_shares(ux, uy, qx, qy, nx, ny, gx, gy, cs, drag, energy):
     """A node's exact shares of the budget (``kernels.exact``, in quanta) after its update u(t-dt) = q ->
     u(t+dt) = n from u(t): with ``drag`` the body drag of the step, sd |n - q|^2 (``output.energy =
@@ -146,7 +146,7 @@ def row_edge(cx, cy, zx, zy, px, py, r, j0, n, s, K, blk, damped, up, cf, ex, ey
     return ds, ks, es
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
 def masked_force(zx, zy, r, j, s, K, blk, mask):
     """C F of node (r, j) from the field (zx, zy), with only the bonds in ``mask``.
 
@@ -168,7 +168,7 @@ def masked_force(zx, zy, r, j, s, K, blk, mask):
             kt * hy + b * (dpx - dqx) + c * (dpy + dqy))
 
 
-@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+@njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
 def node_masked(cx, cy, zx, zy, px, py, r, j, s, K, blk, damped, mask, cf, fx, fy, drag, rated, energy, cs):
     """One node with only the bonds in ``mask`` (block edges), plus C times the external force (fx, fy).
     Returns its exact shares of the budget (``budget_shares``)."""
