@@ -98,7 +98,7 @@ Iface = namedtuple("Iface", "bonds rules claim taken ext_x ext_y exb_x exb_y zer
 Events = namedtuple("Events", "step site kind partner energy traction dissipated count")
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _gap(g, q, tx, ty, bx, by, j, i, d0):
     """(x_ij, y_ij) of top site at local column j (global g) and bottom site local i (global q)."""
     return like(g - q, d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
@@ -106,13 +106,13 @@ def _gap(g, q, tx, ty, bx, by, j, i, d0):
 
 # --- The law's rules, one inlined function each, chosen by the law's codes -----------------------------
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _rest_offset(reform, dx, zero):
     """x0 of a bond that re-forms at x_ij = dx: 0 (REFORM_ZERO) or dx (REFORM_CURRENT)."""
     return zero if reform == REFORM_ZERO else dx
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _heals(rules, bonds, j, q, dvx):
     """Whether free site j may take its claim q (a substrate column; -1: none) this step, by the healing
     rule's bits: HEAL_SPEED while its x-displacement relative to q over the last step, ``dvx``, is below
@@ -133,7 +133,7 @@ def _heals(rules, bonds, j, q, dvx):
 
 # --- Slip weakening (``model.interface``: the peak, the envelope, the secant), chosen by rules.soften --------
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _forced(p, n, site):
     """The nucleation's share of the weakening of global site ``site`` at step n: (n - n_s)/n_w for n_s <= n <=
     n_s + n_w (1 at n_s when n_w = 0), n_s the step its forcing starts (the nucleation's start, plus the
@@ -146,7 +146,7 @@ def _forced(p, n, site):
     return t / p.nuc_steps if p.nuc_steps > 0 else 1.0
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _bond_k(p, bonds, j, site, n, s, dy):
     """(k, w): the shear stiffness of top site j's bond (global ``site``) at step n with shear stretch s = x_ij -
     x0 and y_ij = dy, and its weakening share.  Undamaged (peak 0): k_x, 0.  Weakening: the secant
@@ -168,7 +168,7 @@ def _bond_k(p, bonds, j, site, n, s, dy):
     return (tp - (tp - tr) * w) / (peak + slipped), w
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _shear_k(p, bonds, j, site, n, s, dy):
     """The bond's shear stiffness at step n: k_x without slip weakening (the paper's law, read as such), else
     ``_bond_k``'s."""
@@ -177,7 +177,7 @@ def _shear_k(p, bonds, j, site, n, s, dy):
     return bonds[KX, j]
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _soften(p, bonds, j, site, n, dx, dy, dxp, dyp):
     """Step n of top site j's bond (global ``site``; (x_ij, y_ij) = (dx, dy) at u(n), (dxp, dyp) at u(n - 1))
     by the slip-weakening rule: an undamaged bond holds elastically below its breaking length and, unforced,
@@ -215,13 +215,13 @@ def _soften(p, bonds, j, site, n, dx, dy, dxp, dyp):
     return k, w < 1 and l2 < lim * lim, spent
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _partner(bonds, j):
     """The substrate column site j is bonded to (-1: broken), from its float row."""
     return np.int64(bonds[PARTNER, j])
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _event(it, n, j, site, kind, q, dx, dy, kx, spent):
     """Append one event of top site j (local column; ``site`` global), bond (x_ij, y_ij) = (dx, dy) of shear
     stiffness ``kx``, whose weakening took ``spent`` (m c^2), to the record ``it.events`` (room is guaranteed
@@ -335,7 +335,7 @@ def _breaks(n, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, broken, softened):
     return nfree
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _dx(gl, q, txj, bx, bbase, d0):
     """x_ij of top site ``gl`` (x-displacement ``txj``) and substrate column q, as ``_gap`` computes it."""
     return like(gl - q, d0) + (txj - bx[q - bbase])
@@ -445,7 +445,7 @@ def _grants(n, nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, formed):
 NO_SURFACE, FAR = -1, -2
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _surface(gl, j, tx, ty, bx, by, g, d0):
     """The substrate's surface under top site j (global column ``gl``) at the positions given
     (``model.interface``): (i, nx, ny, w, d), i the local column of the segment's first substrate site (the
@@ -474,7 +474,7 @@ def _surface(gl, j, tx, ty, bx, by, g, d0):
     return i, nx, ny, w, d
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0):
     """r - w e (a, float64): from the point at weight w along the segment of substrate sites (i, i + 1) to top
     site j (global column ``gl``), at the positions given; affine in the three nodes' displacements."""
@@ -486,7 +486,7 @@ def _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0):
     return rx - w * ex, ry - w * ey
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     """The compression delta0 - n . (r - w e) (a, float64) of the contact spring (i, n, w) of top site j at the
     positions given: affine in the three nodes' displacements, delta0 - d where the spring was set up."""
@@ -494,7 +494,7 @@ def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     return float(d0) - (float(nx) * ox + float(ny) * oy)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _along(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     """xi = t . (r - w e) (a, float64), t = (n_y, -n_x) the segment's unit tangent: top site j's place along the
     surface of the contact spring (i, n, w) at the positions given, affine in the three nodes' displacements."""
@@ -502,7 +502,7 @@ def _along(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     return float(ny) * ox - float(nx) * oy
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _stick(e_prev, gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, bbase, d0, mu):
     """Contact friction (``model.interface``): the stick spring's stretch e = clip(e_prev + dxi, -c, c) (a,
     float64) after the site's slip dxi = xi(u(n)) - xi(u(n-1)) along this step's surface (i, n, w, ``_along``),
@@ -514,7 +514,7 @@ def _stick(e_prev, gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, b
     return min(max(float(e_prev) + dxi, -cap), cap), dxi
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it):
     """(normal, tangential): the staggered energies (``kernels.budget.contact_energy``) at (u(n-1), u(n)) of the
     contact spring and of the stick spring free site j had in the step before, set up from u(n-1) (the *p
@@ -588,7 +588,7 @@ def _contacts(nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, switched, rubbed):
             _rub(gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, it, own, switched, rubbed)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _rub(gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, it, own, switched, rubbed):
     """Contact friction on free site j in contact with the segment (i, n, w) at height d: its stick spring's
     new stretch e(n) (``_stick``) into the row, its force -k_c e(n) t on the top node and -(1 - w), -w of it on
@@ -620,7 +620,7 @@ def _rub(gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, it, own, sw
         it.exb_y[i + 1] -= w * fy
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _rubbing(gl, j, tx, ty, bx, by, txp, typ, bxp, byp, it):
     """The x-force (m c^2/a) contact friction puts on free top site j in step n (``_rub``'s, the row left as it
     is): 0 without friction or out of contact."""
@@ -635,7 +635,7 @@ def _rubbing(gl, j, tx, ty, bx, by, txp, typ, bxp, byp, it):
     return float(-p.contact * like(e, d0) * ny)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _apply(j, i, dx, dy, kx, bonds, top_own, bown0, bown1, d0, ext_x, ext_y, exb_x, exb_y):
     """The bond's force f_x = -k_x (x_ij - x0), f_y = -k_y (y_ij - delta0) on its OWNED ends (k_x the bond's
     shear stiffness this step, ``_shear_k``; k_y the top site's own)."""
@@ -687,7 +687,7 @@ def coverage(tx, bx, g):
     return True
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def _staggered_bond(g, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds, kx):
     """The staggered energy of top site j's bond to substrate site i (global g, q) between u(n-1) and u(n),
     with shear stiffness ``kx``."""
