@@ -254,7 +254,7 @@ def _rows(t0, t1, tasks, cur_x, cur_y, z_x, z_y, nxt_x, nxt_y, K, prm, ex, ey, z
     _deposit_shares(bud, ds, ks, es, energy)
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, forceinline=True)
 def _deposit_shares(bud, ds, ks, es, energy):
     bg.deposit(bud.acc, bg.Q_DAMP, ds)
     if energy:
@@ -397,7 +397,7 @@ def _check(n, tasks, cur, nxt, prm, iface, flags):
                 return
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, forceinline=True)
 def _loader_shift(n, prm):
     """How far the loader has moved at t(n + 1), v0 (t(n + 1) - t_drive) (a): the driven face's prescribed x
     for u(n + 1); a spring drive reads its loader at t(n), this less v0 dt.  From ``n_hold`` on the loader

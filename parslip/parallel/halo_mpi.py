@@ -124,7 +124,7 @@ def _release_all() -> None:
     _HELD.clear()
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, forceinline=True)
 def _rect(buf, k, a, r0, rows, j0, n, out):
     """Rows r0 .. r0 + rows - 1 of ``a``, n values each from column j0, into ``buf`` at k (``out``) one row
     after the other, or back; returns k + rows n.  A column (n = 1, every bulk halo) is one strided loop."""
@@ -149,7 +149,7 @@ def _rect(buf, k, a, r0, rows, j0, n, out):
     return k
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, forceinline=True)
 def _move(buf, k, a, r, j0, n, out):
     """n values of row r of ``a`` from column j0 into ``buf`` at k (``out``), or back; returns k + n."""
     if out:

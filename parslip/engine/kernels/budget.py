@@ -83,7 +83,7 @@ NO_UP_MASK = R_ | L_ | DL_ | DR_
 NO_DOWN_MASK = R_ | L_ | UR_ | UL_
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def deposit(acc, q, x):
     """acc[q] (hi, lo: the integer hi * 2^62 + lo, lo in [0, 2^62)) += x, exactly."""
     lo = acc[q, 1] + x
@@ -92,7 +92,7 @@ def deposit(acc, q, x):
     acc[q, 1] = lo - (carry << WORD)
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def exact_parts(acc, q, scale, out, k):
     """out[2:5, k] = three floats whose exact sum is acc[q] / scale[q] (each part exact: the quanta's two
     words cut into pieces of at most 31 bits, times a power of two)."""
@@ -103,7 +103,7 @@ def exact_parts(acc, q, scale, out, k):
     out[4, k] = float(lo & ((1 << 31) - 1)) * inv
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def add(acc, i, v):
     """acc[HI, i] + acc[LO, i] += v without losing a bit (Knuth's two-sum; no FMA can enter it)."""
     a = acc[HI, i]
@@ -129,14 +129,14 @@ def load_sum(cy, oy, r, j0, n, out):
         add(out, LOAD_Y, float(cy[r, j0 + k]) + float(oy[r, j0 + k]))
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def bond_energy(kx, ky, sx0, sy0, sx1, sy1):
     """An interface bond's staggered energy 1/2 [k_x s_x(n-1) s_x(n) + k_y s_y(n-1) s_y(n)], s its stretch
     (x_ij - x0, y_ij - delta0) at the two levels."""
     return 0.5 * (float(kx) * float(sx0) * float(sx1) + float(ky) * float(sy0) * float(sy1))
 
 
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, forceinline=True, _nrt=False)
 def contact_energy(kc, s0, s1):
     """A contact spring's staggered energy 1/2 k_c s(n-1) s(n), s its compression at the two levels (a)."""
     return 0.5 * float(kc) * float(s0) * float(s1)

@@ -29,7 +29,7 @@ def _nbr(k, r, c, s):
     return r - 1, c + s
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _bond_diffs(bx, by, tx, ty, geo, b, r, c, kmax, d):
     """u_j - u_i (float64) of node (b, r, c)'s bonds 0..kmax-1 into d[k], and whether each bond exists."""
     if b == 0:
