@@ -38,7 +38,7 @@ TICK_S = 0.25
 COMPILE_NOTICE_S = 2.0          # say "compiling" when the first call has taken this long
 # A cold compile of the time loop, as measured (docs/developer/kernels.md, "What a compile costs"): CPU time on the
 # one rank per kernel cache that compiles (``engine.compile``); its wall time is longer on a busy machine.
-COMPILE_CPU_S = 60
+COMPILE_CPU_S = 40
 SIGNAL_GRACE_S = 5.0            # a signal not acted on by an agreement within this long (or twice the
                                 # longest gap between agreements) ends the job
 HEARTBEAT_S = 2.0               # at most; a tenth of the watchdog limit when that is shorter

@@ -184,18 +184,18 @@ class Simulation:
     def compile(self):
         """The first call of the compiled loop, taking no step: numba compiles it (or loads it from its
         cache) here, so that progress rates and the ETA never count it.  On several ranks one rank per
-        kernel cache compiles and the others then load, the snapshots' stress kernel included
+        kernel cache compiles the loop and the others then load it; meanwhile another rank compiles the
+        kernels the loop does not call, the exact sums of frames and budget and the snapshots' stresses
         (``engine.compile``); returns how it went (``FirstCall``).  Collective."""
         from .compile import first_call
         self._phase("compile")
 
-        def call():
+        def side():
             from ..parallel.exact_sum import warm
-            self.advance(self.n)
-            warm()                      # the frames' and the budget's sums
+            warm()
             if self.snapshots_total:
                 self.state.node_fields(self.n)
-        return first_call(self.comm, call)
+        return first_call(self.comm, lambda: self.advance(self.n), side)
 
     def run(self, writer=None, until: int | None = None, control=None):
         """Advance to step ``until`` (default: the end), writing frames and snapshots on the way.
