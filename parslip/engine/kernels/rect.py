@@ -19,6 +19,36 @@ from .exact import quant
 from .stencil import K_A, K_B, K_C, K_DAMP, K_N, K_T, _full
 
 
+@njit(cache=True, inline="always", _nrt=False)      # returns views: numba inlines it (no call returns a view)
+def _row_views(fx, fy, r, j0, n, s):
+    """The views of a field (fx, fy) that row r's nodes j0 .. j0 + n - 1 read: row r from column j0 - 1 (left,
+    centre, right at k, k + 1, k + 2), the rows above and below from j0 - 1 + s (up-left and up-right at k,
+    k + 1; down-left and down-right likewise); x then y of each."""
+    return (fx[r, j0 - 1:j0 + 1 + n], fy[r, j0 - 1:j0 + 1 + n],
+            fx[r + 1, j0 - 1 + s:j0 + s + n], fy[r + 1, j0 - 1 + s:j0 + s + n],
+            fx[r - 1, j0 - 1 + s:j0 + s + n], fy[r - 1, j0 - 1 + s:j0 + s + n])
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath={"contract"})
+def _node(xh, yh, xu, yu, xd, yd, ch, dh, ox, oy, k, kn, kt, a, b, c, bb, rated):
+    """Node k of a row: C F from z (the views of ``_row_views``), u(t) (from c with the bonds' dashpots, else
+    z is u) and u(t+dt) = u + (B (u - q) + C F) written over q = u(t-dt) in (ox, oy).  Returns u, q, the new
+    u and C F, for the sums.  B = 1 exactly without the body drag: 1 (u - q) + f, even contracted to
+    fma(1, u - q, f), rounds as (u - q) + f, so the undamped loops need no version of their own."""
+    fx, fy = _full(xh[k + 1], yh[k + 1], xh[k], xh[k + 2], yh[k], yh[k + 2], xu[k + 1], xd[k], xu[k],
+                   xd[k + 1], yu[k + 1], yd[k], yu[k], yd[k + 1], kn, kt, a, b, c)
+    if rated:
+        ux, uy = ch[k + 1], dh[k + 1]
+    else:
+        ux, uy = xh[k + 1], yh[k + 1]
+    qx, qy = ox[k], oy[k]
+    nx = ux + (bb * (ux - qx) + fx)
+    ny = uy + (bb * (uy - qy) + fy)
+    ox[k] = nx
+    oy[k] = ny
+    return ux, uy, qx, qy, nx, ny, fx, fy
+
+
 @njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
 def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb, rated):
     """The loop of ``rect_full`` in a step that sums nothing, for a constant ``rated``: one branch-free,
@@ -26,25 +56,11 @@ def _rect_loop(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb,
     for i in range(rows):
         r = r0 + i
         s = s0 ^ (i & 1)
-        # Row r from column j0 - 1 (left, centre, right at k, k + 1, k + 2), the rows above and below from
-        # j0 - 1 + s (up-left and up-right at k, k + 1; down-left and down-right likewise).
-        xh, yh = zx[r, j0 - 1:j0 + 1 + n], zy[r, j0 - 1:j0 + 1 + n]
-        xu, yu = zx[r + 1, j0 - 1 + s:j0 + s + n], zy[r + 1, j0 - 1 + s:j0 + s + n]
-        xd, yd = zx[r - 1, j0 - 1 + s:j0 + s + n], zy[r - 1, j0 - 1 + s:j0 + s + n]
+        xh, yh, xu, yu, xd, yd = _row_views(zx, zy, r, j0, n, s)
         ch, dh = cx[r, j0 - 1:j0 + 1 + n], cy[r, j0 - 1:j0 + 1 + n]
         ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
         for k in range(n):
-            fx, fy = _full(xh[k + 1], yh[k + 1], xh[k], xh[k + 2], yh[k], yh[k + 2], xu[k + 1], xd[k], xu[k],
-                           xd[k + 1], yu[k + 1], yd[k], yu[k], yd[k + 1], kn, kt, a, b, c)
-            if rated:
-                ux, uy = ch[k + 1], dh[k + 1]
-            else:
-                ux, uy = xh[k + 1], yh[k + 1]
-            # B = 1 exactly without the body drag: 1 (u - q) + f, even contracted to fma(1, u - q, f), rounds as
-            # (u - q) + f, so the undamped loops need no version of their own.
-            qx, qy = ox[k], oy[k]
-            ox[k] = ux + (bb * (ux - qx) + fx)
-            oy[k] = uy + (bb * (uy - qy) + fy)
+            _node(xh, yh, xu, yu, xd, yd, ch, dh, ox, oy, k, kn, kt, a, b, c, bb, rated)
 
 
 @njit(cache=True, forceinline=True, _nrt=False, fastmath={"contract"})
@@ -60,26 +76,12 @@ def _rect_sums(cx, cy, zx, zy, px, py, r0, rows, j0, n, s0, kn, kt, a, b, c, bb,
     for i in range(rows):
         r = r0 + i
         s = s0 ^ (i & 1)
-        xh, yh = zx[r, j0 - 1:j0 + 1 + n], zy[r, j0 - 1:j0 + 1 + n]
-        xu, yu = zx[r + 1, j0 - 1 + s:j0 + s + n], zy[r + 1, j0 - 1 + s:j0 + s + n]
-        xd, yd = zx[r - 1, j0 - 1 + s:j0 + s + n], zy[r - 1, j0 - 1 + s:j0 + s + n]
-        ch, dh = cx[r, j0 - 1:j0 + 1 + n], cy[r, j0 - 1:j0 + 1 + n]
-        cu, du = cx[r + 1, j0 - 1 + s:j0 + s + n], cy[r + 1, j0 - 1 + s:j0 + s + n]
-        cd, dd = cx[r - 1, j0 - 1 + s:j0 + s + n], cy[r - 1, j0 - 1 + s:j0 + s + n]
+        xh, yh, xu, yu, xd, yd = _row_views(zx, zy, r, j0, n, s)
+        ch, dh, cu, du, cd, dd = _row_views(cx, cy, r, j0, n, s)
         ox, oy = px[r, j0:j0 + n], py[r, j0:j0 + n]
         for k in range(n):
-            fx, fy = _full(xh[k + 1], yh[k + 1], xh[k], xh[k + 2], yh[k], yh[k + 2], xu[k + 1], xd[k], xu[k],
-                           xd[k + 1], yu[k + 1], yd[k], yu[k], yd[k + 1], kn, kt, a, b, c)
-            if rated:
-                ux, uy = ch[k + 1], dh[k + 1]
-            else:
-                ux, uy = xh[k + 1], yh[k + 1]
-            qx, qy = ox[k], oy[k]
-            nx = ux + (bb * (ux - qx) + fx)
-            ny = uy + (bb * (uy - qy) + fy)
-            ox[k] = nx
-            oy[k] = ny
-            gx, gy = fx, fy
+            ux, uy, qx, qy, nx, ny, gx, gy = _node(xh, yh, xu, yu, xd, yd, ch, dh, ox, oy, k, kn, kt, a, b, c, bb,
+                                                   rated)
             if rated:
                 gx, gy = _full(ux, uy, ch[k], ch[k + 2], dh[k], dh[k + 2], cu[k + 1], cd[k], cu[k], cd[k + 1],
                                du[k + 1], dd[k], du[k], dd[k + 1], kn, kt, a, b, c)
