@@ -11,8 +11,9 @@ Here, on several ranks:
    folder;
 2. they make the first call, which compiles the kernels into their folder, while the others sleep
    (``parallel.collective.wait_quietly``: MPICH's blocking calls poll a core); meanwhile the helper compiles
-   the kernels the loop does not call (``side``: the output's exact sums and the snapshots' stresses) into
-   the same folder: the first run's wall time is shortened by their compile, its CPU time not lengthened;
+   ``side`` into the same folder: the frames' kernels, which the loop's compile reaches last and then loads,
+   and the kernels the loop does not call (the output's exact sums, the snapshots' stresses).  The first
+   run's wall time is shortened by their compile, its CPU time not lengthened;
 3. their outcome is told to every rank (``parallel.collective.outcome``): a compile that failed ends every
    rank with the same RunError, none left waiting; otherwise every rank makes the calls it has not made,
    which load the kernels from the cache.

@@ -617,7 +617,39 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
     beat[BEAT_STEP] = n
     beat[BEAT_IN_LOOP] = 1
     tm = diag.timers
+    stepped = False
+    # The step n -> n + 1 stands before the frame of step n in the text (the loop enters at the frame): numba
+    # types and compiles the callees in the order they are written, so the frames' kernels come last, and a
+    # job's helper rank has compiled them into the cache by then (``record_signature``, ``engine.compile``).
     while True:
+        if stepped:
+            cur = _level(lv, n)
+            nxt = _level(lv, n + 1)
+            _step(n, n1, cur, nxt, Level(lv.zbx, lv.zby, lv.ztx, lv.zty), plan, sched, K, prm, iface, drive, diag,
+                  bud)
+            if (n + 1) % check == 0:
+                t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
+                _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)
+                g = diag.gflags
+                diag.flags[L_EVENTS] = iface.events.count[0]
+                if prm.follow:
+                    _drift(nxt, prm, iface, diag.flags)
+                for i in range(g.shape[0]):
+                    g[i] = diag.flags[i]
+                reduce_max(plan, g)
+                tm[T_CHECK] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
+                beat[BEAT_STEP] = n + 1
+                if g[L_BITS] != 0:
+                    beat[BEAT_IN_LOOP] = 0
+                    return n + 1, STOPPED
+                if prm.follow and _near_edge(g, diag.halo):
+                    beat[BEAT_IN_LOOP] = 0
+                    return n + 1, REBUILD
+                if g[L_EVENTS] > prm.event_limit:
+                    beat[BEAT_IN_LOOP] = 0
+                    return n + 1, EVENTS_FULL
+            n += 1
+        stepped = True
         cur = _level(lv, n)
         if n == prm.n_drive_start:          # before its frame: the drive's start is the budget's zero
             _budget_start(cur, _level(lv, n + 1), drive, bud)
@@ -628,28 +660,11 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
         if n >= n1:
             beat[BEAT_IN_LOOP] = 0
             return n, DONE
-        nxt = _level(lv, n + 1)
-        _step(n, n1, cur, nxt, Level(lv.zbx, lv.zby, lv.ztx, lv.zty), plan, sched, K, prm, iface, drive, diag, bud)
-        if (n + 1) % check == 0:
-            t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2])
-            _check(n, sched.tasks, cur, nxt, prm, iface, diag.flags)
-            g = diag.gflags
-            diag.flags[L_EVENTS] = iface.events.count[0]
-            if prm.follow:
-                _drift(nxt, prm, iface, diag.flags)
-            for i in range(g.shape[0]):
-                g[i] = diag.flags[i]
-            reduce_max(plan, g)
-            tm[T_CHECK] += now_ns(tm[T_CLOCK:T_CLOCK + 2]) - t0
-            beat[BEAT_STEP] = n + 1
-            if g[L_BITS] != 0:
-                beat[BEAT_IN_LOOP] = 0
-                return n + 1, STOPPED
-            if prm.follow and _near_edge(g, diag.halo):
-                beat[BEAT_IN_LOOP] = 0
-                return n + 1, REBUILD
-            if g[L_EVENTS] > prm.event_limit:
-                beat[BEAT_IN_LOOP] = 0
-                return n + 1, EVENTS_FULL
-        n += 1
 
+
+def record_signature(lv, sched, K, prm, iface, drive, frames, diag, bud) -> tuple:
+    """The argument types with which ``advance``, called with these, calls ``_record``: compiling ``_record``
+    for them (``_record.compile``) fills numba's cache with what compiling ``advance`` would compile."""
+    from numba import typeof
+    cur = _level.py_func(lv, 0)
+    return tuple(typeof(a) for a in (np.int64(0), cur, cur, sched, K, prm, iface, drive, bud, frames, diag.timers))

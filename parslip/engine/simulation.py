@@ -185,13 +185,17 @@ class Simulation:
         """The first call of the compiled loop, taking no step: numba compiles it (or loads it from its
         cache) here, so that progress rates and the ETA never count it.  On several ranks one rank per
         kernel cache compiles the loop and the others then load it; meanwhile another rank compiles the
-        kernels the loop does not call, the exact sums of frames and budget and the snapshots' stresses
-        (``engine.compile``); returns how it went (``FirstCall``).  Collective."""
+        frames' kernels (which the loop types last) and those the loop does not call, the exact sums of frames
+        and budget and the snapshots' stresses (``engine.compile``); returns how it went (``FirstCall``).
+        Collective."""
         from .compile import first_call
         self._phase("compile")
 
         def side():
             from ..parallel.exact_sum import warm
+            s = self.state
+            L._record.compile(L.record_signature(s.levels, self.sched, s.K, self.params, s.iface, s.drive,
+                                                 self.frames, self.diag, self.budget))
             warm()
             if self.snapshots_total:
                 self.state.node_fields(self.n)

@@ -103,7 +103,9 @@ def exact_parts(acc, q, scale, out, k):
     out[4, k] = float(lo & ((1 << 31) - 1)) * inv
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def add(acc, i, v):
     """acc[HI, i] + acc[LO, i] += v without losing a bit (Knuth's two-sum; no FMA can enter it)."""
     a = acc[HI, i]

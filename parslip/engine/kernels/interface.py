@@ -445,7 +445,9 @@ def _grants(n, nfree, tx, ty, bx, by, txp, typ, bxp, byp, it, zero, formed):
 NO_SURFACE, FAR = -1, -2
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _surface(gl, j, tx, ty, bx, by, g, d0):
     """The substrate's surface under top site j (global column ``gl``) at the positions given
     (``model.interface``): (i, nx, ny, w, d), i the local column of the segment's first substrate site (the
@@ -494,7 +496,9 @@ def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     return float(d0) - (float(nx) * ox + float(ny) * oy)
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _along(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     """xi = t . (r - w e) (a, float64), t = (n_y, -n_x) the segment's unit tangent: top site j's place along the
     surface of the contact spring (i, n, w) at the positions given, affine in the three nodes' displacements."""
@@ -687,7 +691,9 @@ def coverage(tx, bx, g):
     return True
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _staggered_bond(g, q, tx, ty, bx, by, txp, typ, bxp, byp, j, i, d0, bonds, kx):
     """The staggered energy of top site j's bond to substrate site i (global g, q) between u(n-1) and u(n),
     with shear stiffness ``kx``."""
