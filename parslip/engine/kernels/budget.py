@@ -131,14 +131,18 @@ def load_sum(cy, oy, r, j0, n, out):
         add(out, LOAD_Y, float(cy[r, j0 + k]) + float(oy[r, j0 + k]))
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def bond_energy(kx, ky, sx0, sy0, sx1, sy1):
     """An interface bond's staggered energy 1/2 [k_x s_x(n-1) s_x(n) + k_y s_y(n-1) s_y(n)], s its stretch
     (x_ij - x0, y_ij - delta0) at the two levels."""
     return 0.5 * (float(kx) * float(sx0) * float(sx1) + float(ky) * float(sy0) * float(sy1))
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def contact_energy(kc, s0, s1):
     """A contact spring's staggered energy 1/2 k_c s(n-1) s(n), s its compression at the two levels (a)."""
     return 0.5 * float(kc) * float(s0) * float(s1)

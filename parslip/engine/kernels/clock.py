@@ -21,7 +21,9 @@ CLOCK_MONOTONIC = 1
 _clock_gettime = types.ExternalFunction("clock_gettime", types.int32(types.int32, types.voidptr))
 
 
-@njit(cache=True)
+# Inlined by numba: the step and the frames read the clock, and a job compiles those on two ranks at once
+# (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always")
 def now_ns(buf):
     """Nanoseconds of the monotonic clock; ``buf`` is a scratch int64 array of length 2 (struct timespec)."""
     _clock_gettime(np.int32(CLOCK_MONOTONIC), buf.ctypes.data)

@@ -98,7 +98,9 @@ Iface = namedtuple("Iface", "bonds rules claim taken ext_x ext_y exb_x exb_y zer
 Events = namedtuple("Events", "step site kind partner energy traction dissipated count")
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _gap(g, q, tx, ty, bx, by, j, i, d0):
     """(x_ij, y_ij) of top site at local column j (global g) and bottom site local i (global q)."""
     return like(g - q, d0) + (tx[j] - bx[i]), d0 + (ty[j] - by[i])
@@ -133,7 +135,9 @@ def _heals(rules, bonds, j, q, dvx):
 
 # --- Slip weakening (``model.interface``: the peak, the envelope, the secant), chosen by rules.soften --------
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _forced(p, n, site):
     """The nucleation's share of the weakening of global site ``site`` at step n: (n - n_s)/n_w for n_s <= n <=
     n_s + n_w (1 at n_s when n_w = 0), n_s the step its forcing starts (the nucleation's start, plus the
@@ -146,7 +150,9 @@ def _forced(p, n, site):
     return t / p.nuc_steps if p.nuc_steps > 0 else 1.0
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _bond_k(p, bonds, j, site, n, s, dy):
     """(k, w): the shear stiffness of top site j's bond (global ``site``) at step n with shear stretch s = x_ij -
     x0 and y_ij = dy, and its weakening share.  Undamaged (peak 0): k_x, 0.  Weakening: the secant
@@ -215,7 +221,9 @@ def _soften(p, bonds, j, site, n, dx, dy, dxp, dyp):
     return k, w < 1 and l2 < lim * lim, spent
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _partner(bonds, j):
     """The substrate column site j is bonded to (-1: broken), from its float row."""
     return np.int64(bonds[PARTNER, j])
@@ -476,7 +484,9 @@ def _surface(gl, j, tx, ty, bx, by, g, d0):
     return i, nx, ny, w, d
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0):
     """r - w e (a, float64): from the point at weight w along the segment of substrate sites (i, i + 1) to top
     site j (global column ``gl``), at the positions given; affine in the three nodes' displacements."""
@@ -488,7 +498,9 @@ def _offset(gl, j, i, w, tx, ty, bx, by, bbase, d0):
     return rx - w * ex, ry - w * ey
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _compression(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     """The compression delta0 - n . (r - w e) (a, float64) of the contact spring (i, n, w) of top site j at the
     positions given: affine in the three nodes' displacements, delta0 - d where the spring was set up."""
@@ -506,7 +518,9 @@ def _along(gl, j, i, nx, ny, w, tx, ty, bx, by, bbase, d0):
     return float(ny) * ox - float(nx) * oy
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _stick(e_prev, gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, bbase, d0, mu):
     """Contact friction (``model.interface``): the stick spring's stretch e = clip(e_prev + dxi, -c, c) (a,
     float64) after the site's slip dxi = xi(u(n)) - xi(u(n-1)) along this step's surface (i, n, w, ``_along``),
@@ -518,7 +532,9 @@ def _stick(e_prev, gl, j, i, nx, ny, w, d, tx, ty, bx, by, txp, typ, bxp, byp, b
     return min(max(float(e_prev) + dxi, -cap), cap), dxi
 
 
-@njit(cache=True, forceinline=True, _nrt=False)
+# Inlined by numba: the step's kernels and the frames' call it, and a job compiles those on two ranks at
+# once (engine.compile); compiled on its own, both would compile it.
+@njit(cache=True, inline="always", _nrt=False)
 def _contact_before(j, tx, ty, bx, by, txp, typ, bxp, byp, it):
     """(normal, tangential): the staggered energies (``kernels.budget.contact_energy``) at (u(n-1), u(n)) of the
     contact spring and of the stick spring free site j had in the step before, set up from u(n-1) (the *p
