@@ -62,7 +62,8 @@ class FirstCall:
         if self.ranks == 1:
             return f"{took}; stored in numba's cache for later runs)"
         rest = ", the others loaded it from numba's cache" if self.compiled_on < self.ranks else " sharing the work"
-        return f"{took} summed over the ranks; {self.functions} functions): on {self.compiled_on} of {self.ranks} ranks{rest}"
+        return (f"{took} summed over the ranks; {self.functions} functions): on {self.compiled_on} of "
+                f"{self.ranks} ranks{rest}")
 
 
 def compiled_names(fn) -> list[str]:
