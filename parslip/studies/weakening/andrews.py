@@ -220,17 +220,25 @@ def tips_figure(rs, img, source):
         s = r["_m"]["sides"][0]
         line, = ax.plot(s["t"], s["r"], lw=1, label=f"S = {r['S']:.1f}")
         ax.axhline(r["reflection"], color=line.get_color(), ls=":", lw=0.6)
+    tips_axes(ax, waves, 600.0, (0, 600), (0, 700),
+              "weakening_andrews: rupture fronts (dotted: where the reflected wave arrives)")
+    return save(fig, img, "weakening_andrews_tips", source)
+
+
+def tips_axes(ax, waves: dict, t_max: float, xlim, ylim, title: str) -> None:
+    """The axes of a tip-position figure (distance from the hypocentre against time since the first break):
+    the lines of the waves in ``waves`` (c_R, c_s, c_l in c_r) up to ``t_max``, the limits, labels, legend
+    and title."""
     if waves:
-        t = np.array([0.0, 600.0])
+        t = np.array([0.0, t_max])
         for key, ls in (("c_R", "-"), ("c_s", "--"), ("c_l", "-.")):
             ax.plot(t, waves[key] * t, ls, color="0.5", lw=0.8, label=f"{key} = {waves[key]:.3g} c_r")
-    ax.set_xlim(0, 600)
-    ax.set_ylim(0, 700)
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
     ax.set_xlabel("time since the first break (a / c_r)")
     ax.set_ylabel("distance from the hypocentre, +x side (a)")
     ax.legend(fontsize=6, ncol=2)
-    ax.set_title("weakening_andrews: rupture fronts (dotted: where the reflected wave arrives)", fontsize=8)
-    return save(fig, img, "weakening_andrews_tips", source)
+    ax.set_title(title, fontsize=8)
 
 
 def tabulate(runs: str, img: str, tables: str) -> str:

@@ -211,16 +211,8 @@ def tips_figure(rs, img, source):
         if math.isfinite(r["L_trans_plus"]):
             ax.plot(_at(s, r["L_trans_plus"]), r["L_trans_plus"], "o", color=line.get_color(), ms=4)
         reach = max(reach, r["reflection"])
-    if waves:
-        t = np.array([0.0, reach])
-        for key, ls in (("c_R", "-"), ("c_s", "--"), ("c_l", "-.")):
-            ax.plot(t, waves[key] * t, ls, color="0.5", lw=0.8, label=f"{key} = {waves[key]:.3g} c_r")
-    ax.set_xlim(0, reach / 1.1 if reach else None)
-    ax.set_ylim(0, reach if reach else None)
-    ax.set_xlabel("time since the first break (a / c_r)")
-    ax.set_ylabel("distance from the hypocentre, +x side (a)")
-    ax.legend(fontsize=6, ncol=2)
-    ax.set_title("weakening_shape: rupture fronts by elastic share (dots: L_trans)", fontsize=8)
+    andrews.tips_axes(ax, waves, reach, (0, reach / 1.1 if reach else None), (0, reach if reach else None),
+                      "weakening_shape: rupture fronts by elastic share (dots: L_trans)")
     return save(fig, img, "weakening_shape_tips", source)
 
 
