@@ -221,16 +221,31 @@ def test_overlap_cuts_only_the_rows_peers_keep():
 def test_slabs_narrower_than_the_slip_are_bitwise_identical(small_runs, tmp_path):
     """Eight ranks on 40 columns: under the contact slabs of 3 or 4 columns, narrower than the interface halos
     (9 to 11 columns), so halos reach across several slabs (multi-hop).  With run.overlap, so that the cut rows
-    and the exchange that overlaps the rest give the bits of one rank too (1, 2 and 3 ranks run without)."""
+    and the exchange that overlaps the rest give the bits of one rank too (1, 2 and 3 ranks run without).
+    The ranks are grouped three to a pretend node (``PARSLIP_NODE_RANKS``): a rank reaches the peers of its
+    group through the shared windows and the others by MPI messages, both in one exchange (the 1-, 2- and
+    3-rank runs use the windows alone)."""
     require("gather")
     st = derive(scene(**{**SMALL, **QUICK}))
     lay = build_layout(st.lattice, 0, 8, st.reach)
     assert max(np.diff(lay.bounds)[1:-1]) < min(st.reach.bottom) and len(lay.peers) >= 3
     ref = small_runs.get("gather", 1)[0]
     out = tmp_path / "r8.vtkhdf"
-    p = run_cli(8, "run", small_runs.scene, "--out", out, "--no-png", "--quiet", "--set", "run.overlap=true")
+    p = run_cli(8, "run", small_runs.scene, "--out", out, "--no-png", "--set", "run.overlap=true",
+                env={"PARSLIP_NODE_RANKS": "3"})
     assert p.returncode == 0, p.stderr
+    assert "halo exchange: shared memory with 1 to 2 peers on its node, messages to 1 to 4" in p.stderr, p.stderr
     assert_same_datasets(datasets(out)[0], ref, "gather on 8 ranks")
+
+
+def test_messages_alone_give_the_bits_of_shared_memory(small_runs, tmp_path):
+    """``run.exchange = "messages"``: every halo copy travels as an MPI message; the same bits as one rank."""
+    require("gather")
+    out = tmp_path / "m3.vtkhdf"
+    p = run_cli(3, "run", small_runs.scene, "--out", out, "--no-png", "--set", 'run.exchange="messages"')
+    assert p.returncode == 0, p.stderr
+    assert "halo exchange: MPI messages" in p.stderr, p.stderr
+    assert_same_datasets(datasets(out)[0], small_runs.get("gather", 1)[0], "messages on 3 ranks")
 
 
 def test_slip_beyond_the_halo_stops_the_run(tmp_path):

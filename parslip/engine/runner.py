@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 from .. import hooks
 from ..parallel import collective
+from ..parallel.exchange import describe as describe_exchange
 from ..version import __version__
 from ..errors import ConfigError, RunError, WriteError
 
@@ -249,6 +250,9 @@ class Job:
         log.info(f"{name}: {st.lattice.n_nodes} nodes on {size} rank(s), dt = {st.dt:.5g} "
                  f"({st.dt / st.dt_limit:.2f} of the stability limit), {st.n_steps} steps -> {self.out}"
                  + (f"; continuing from step {self.sim.n} ({self.plan.checkpoint})" if self.plan.checkpoint else ""))
+        said = describe_exchange(self.sim.plan, self.ranks.comm)
+        if said:
+            log.info(said)
 
     def _make_control(self, watchdog, stop_after):
         from .control import RunControl

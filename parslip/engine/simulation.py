@@ -100,7 +100,7 @@ class Simulation:
         self.state = State(st, layout, self.dtype, event_capacity=capacity)
         if getattr(self, "plan", None) is not None:
             release(self.plan)
-        self.plan = build_plan(layout, self.dtype, self.comm)
+        self.plan = build_plan(layout, self.dtype, self.comm, st.shared_memory)
         self.sched = L.Schedule(tasks=layout.tasks, ptr=task_ranges(layout.tasks))
         drift = layout.reach.drift if layout.reach is not None else None
         self.params = self.params._replace(shift=drift.shift if drift is not None else 0)

@@ -7,8 +7,10 @@ numba compiles:
 - ``NullPlan`` (one rank): every phase is a no-op.  The loop compiled for it
   references no MPI symbol, so a one-rank run never loads an MPI library.
 - ``halo_mpi.Plan`` (several ranks): ``post`` packs the OWNED values each
-  peer keeps as HALO and posts MPI_Irecv and MPI_Isend; ``complete`` waits
-  (MPI_Waitall) and unpacks into the HALO copies; ``progress`` lets MPI move
+  peer keeps as HALO and starts its persistent receives and sends (MPI_Startall),
+  or, for a peer on the same node, packs them straight into that peer's shared
+  window and sets a flag (``parallel.shm``); ``complete`` waits (MPI_Waitall,
+  or the peer's flag) and unpacks into the HALO copies; ``progress`` lets MPI move
   the messages while the loop computes (MPI_Testall); ``reduce_max`` takes
   the MAX of the loop's flags over all ranks (MPI_Allreduce).
   ``parallel.halo_mpi`` holds them and is imported only when a communicator
@@ -20,19 +22,40 @@ the block's interface sites.
 """
 from __future__ import annotations
 
+import numpy as np
 from numba import types
 from numba.extending import overload
 
 from .plans import SEGMENT, SITES, NullPlan, Plan  # noqa: F401 - the plan types the phases dispatch on
 
 
-def build_plan(layout, dtype, comm=None):
+def build_plan(layout, dtype, comm=None, shared=True):
     """The exchange plan of ``layout``: a ``NullPlan`` without a communicator of more than one rank,
-    else the MPI plan (this loads the MPI library mpi4py uses)."""
+    else the MPI plan (this loads the MPI library mpi4py uses), through shared memory to the peers on this
+    rank's node if ``shared`` (``run.exchange``)."""
     if comm is None or comm.Get_size() == 1:
         return NullPlan(1)
     from . import halo_mpi
-    return halo_mpi.build_plan(layout, dtype, comm)
+    return halo_mpi.build_plan(layout, dtype, comm, shared)
+
+
+def describe(plan, comm) -> str:
+    """Collective: how halo copies travel, over all ranks, for the run's log: ``halo exchange: shared memory
+    with A to B peers on its node, messages to C to D`` (the fewest and most on any rank), or ``halo exchange:
+    MPI messages`` when no rank shares memory with a peer; empty on one rank."""
+    if comm is None or comm.Get_size() == 1:
+        return ""
+    from mpi4py import MPI
+    shared = int(plan.shared.sum())
+    mine = np.array([shared, -shared, len(plan.peer) - shared, shared - len(plan.peer)], np.int64)
+    got = np.empty_like(mine)
+    comm.Allreduce(mine, got, op=MPI.MIN)
+    lo_s, hi_s, lo_m, hi_m = got[0], -got[1], got[2], -got[3]
+    if hi_s == 0:
+        return "halo exchange: MPI messages"
+    span = lambda lo, hi: f"{lo}" if lo == hi else f"{lo} to {hi}"      # noqa: E731
+    line = f"halo exchange: shared memory with {span(lo_s, hi_s)} peer{'s' * (hi_s > 1)} on its node"
+    return line + (f", messages to {span(lo_m, hi_m)}" if hi_m else "")
 
 
 def release(plan) -> None:

@@ -5,7 +5,9 @@ importing it loads the MPI library mpi4py uses (``parallel.mpi``).
 
 ``mpi_post`` packs the OWNED values each peer keeps as HALO and starts every receive and send at once
 (persistent requests, made once per plan: MPI_Recv_init, MPI_Send_init; one MPI_Startall);
-``mpi_complete`` waits (MPI_Waitall) and unpacks into the HALO copies; ``mpi_progress`` tests the requests
+``mpi_complete`` waits (MPI_Waitall) and unpacks into the HALO copies.  A peer on the same node is reached
+through shared memory instead (``parallel.shm``, unless the scene says ``run.exchange = "messages"``): the
+message is packed straight into the peer's window and a flag says it is there, with no MPI call; ``mpi_progress`` tests the requests
 so MPI moves large messages while the loop computes; ``mpi_reduce_max`` takes the MAX
 of the loop's flags over all ranks (MPI_Allreduce).  One message per peer
 per step carries every rectangle of row segments' x then y, then, for each run of
@@ -23,15 +25,18 @@ from numba import njit
 
 from ..model.interface import BONDS
 from ..model.lattice import BOTTOM
-from . import mpi
+from . import mpi, shm
 from .plans import REDUCE_WORDS, SEGMENT, SITES, Plan
 
 TAG = 7
+TAG_LINK = 8          # set-up: where each peer's message lies in its receiver's window
 
 
-def build_plan(layout, dtype, comm=None) -> Plan:
+def build_plan(layout, dtype, comm=None, shared=True) -> Plan:
     """Index arrays and buffers of ``layout``'s exchange, in local columns; MPI handles from ``comm``
-    (without one, a plan to inspect, e.g. its buffer sizes, not to run)."""
+    (without one, a plan to inspect, e.g. its buffer sizes, not to run).  With ``shared``, peers on this
+    rank's node are reached through shared windows (collective over ``comm``: every rank builds its plan
+    at the same time, with the same ``shared``)."""
     from ..model.lattice import TOP
 
     blocks = layout.blocks
@@ -73,42 +78,113 @@ def build_plan(layout, dtype, comm=None) -> Plan:
     rb_ptr = sizes(rs, rs_ptr, rts, rts_ptr)
     h = mpi.handles(comm, dtype) if comm is not None else np.zeros(4, mpi.HANDLE_DTYPE)
     sbuf, rbuf = np.zeros(sb_ptr[-1], dtype), np.zeros(rb_ptr[-1], dtype)
-    req = _persistent(comm, peers, sbuf, sb_ptr, rbuf, rb_ptr, dtype)
+    ranks = [p.rank for p in peers]
+    link = _link(comm, ranks, sb_ptr, rb_ptr, dtype) if comm is not None and shared else _unlinked(ranks, dtype)
+    by_mpi = [i for i in range(len(peers)) if not link["shared"][i]]
+    req, made = _persistent(comm, ranks, by_mpi, sbuf, sb_ptr, rbuf, rb_ptr, dtype)
     status = np.zeros(max(1, 2 * len(peers)) * mpi.STATUS_BYTES, np.uint8)
-    return Plan(peer=np.array([p.rank for p in peers], np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,
+    windows = link.pop("windows")
+    plan = Plan(peer=np.array(ranks, np.int32), ss=ss, ss_ptr=ss_ptr, sts=sts, sts_ptr=sts_ptr,
                 rs=rs, rs_ptr=rs_ptr, rts=rts, rts_ptr=rts_ptr, sbuf=sbuf, sb_ptr=sb_ptr,
                 rbuf=rbuf, rb_ptr=rb_ptr, req=req, status=status, handles=h,
-                rflags=np.zeros(REDUCE_WORDS, np.int64), travel=np.array(BONDS.travel, np.int64))
+                rflags=np.zeros(REDUCE_WORDS, np.int64), travel=np.array(BONDS.travel, np.int64),
+                seq=np.zeros(1, np.int64), **link)
+    if made or windows is not None:
+        _HELD[id(plan.seq)] = (made, windows)
+    return plan
 
 
-# The persistent requests of each plan (mpi4py's Prequest objects, by the id of the plan's request array):
-# made once, started every step from compiled code, freed with ``release``.
+_NODES: dict = {}
+
+
+def node_comm(comm):
+    """The ranks of ``comm`` that share this rank's node (``MPI_Comm_split_type``, made once per communicator
+    and kept: a collective on first use).  ``PARSLIP_NODE_RANKS=k`` splits each node further into groups of k
+    consecutive ranks, as if a node held k ranks: the mixed transport (windows within a group, messages
+    between groups) tested on one machine."""
+    import os
+    from mpi4py import MPI
+    key = comm.py2f()
+    if key not in _NODES:
+        node = comm.Split_type(MPI.COMM_TYPE_SHARED, key=comm.Get_rank())
+        group = int(os.environ.get("PARSLIP_NODE_RANKS", "0") or 0)
+        if group > 0:
+            node = node.Split(color=node.Get_rank() // group, key=node.Get_rank())
+        _NODES[key] = node
+    return _NODES[key]
+
+
+def _unlinked(ranks, dtype) -> dict:
+    """The plan's shared-window fields when every peer gets messages (or the plan is only inspected)."""
+    n = len(ranks)
+    return dict(shared=np.zeros(n, np.uint8), node=np.zeros(0, dtype), dst=np.zeros((2, n), np.int64),
+                src=np.zeros((2, n), np.int64), ready=np.zeros(0, np.int64), fdst=np.zeros(n, np.int64),
+                fsrc=np.zeros(n, np.int64), windows=None)
+
+
+def _link(comm, ranks, sb_ptr, rb_ptr, dtype) -> dict:
+    """The shared windows of this rank's node and where, in them, each on-node peer's messages lie; every
+    rank of ``comm`` calls it at once.  Each rank tells each peer where that peer's message to it lies in its
+    own segment (both parities), its length and the flag kept for it; the sender checks the length against
+    what it packs."""
+    from mpi4py import MPI
+    node = node_comm(comm)
+    n, tot = len(ranks), int(rb_ptr[-1])
+    win = shm.Windows(node, dtype, tot, n)
+    on = MPI.Group.Translate_ranks(comm.Get_group(), ranks, node.Get_group()) if n else []
+    tell = np.array([[rb_ptr[i], tot + rb_ptr[i], rb_ptr[i + 1] - rb_ptr[i], i * shm.FLAG_STRIDE]
+                     for i in range(n)], np.int64).reshape(n, 4)
+    got = np.zeros_like(tell)
+    reqs = [comm.Irecv(got[i], source=r, tag=TAG_LINK) for i, r in enumerate(ranks)]
+    reqs += [comm.Isend(tell[i], dest=r, tag=TAG_LINK) for i, r in enumerate(ranks)]
+    MPI.Request.Waitall(reqs)
+    out = _unlinked(ranks, dtype)
+    out.update(node=win.data, ready=win.flags, windows=win)
+    me = node.Get_rank()
+    for i, q in enumerate(on):
+        if q == MPI.UNDEFINED:
+            continue
+        if got[i, 2] != sb_ptr[i + 1] - sb_ptr[i]:
+            raise RuntimeError(f"parslip: rank {comm.Get_rank()} would send {sb_ptr[i + 1] - sb_ptr[i]} values "
+                               f"to rank {ranks[i]}, which expects {got[i, 2]}")
+        out["shared"][i] = 1
+        out["dst"][:, i] = win.data_base[q] + got[i, :2]
+        out["src"][:, i] = win.data_base[me] + tell[i, :2]
+        out["fdst"][i] = win.flags_base[q] + got[i, 3]
+        out["fsrc"][i] = win.flags_base[me] + tell[i, 3]
+    return out
+
+
+# What each plan holds in MPI (by the id of its ``seq`` array): its persistent requests (mpi4py's Prequest
+# objects: made once, started every step from compiled code) and its shared windows; freed with ``release``.
 _HELD: dict = {}
 
 
-def _persistent(comm, peers, sbuf, sb_ptr, rbuf, rb_ptr, dtype) -> np.ndarray:
-    """The plan's requests, [receive from each peer, send to each peer], as persistent requests over its
-    buffers (``MPI_Recv_init``, ``MPI_Send_init``): a step starts them and waits for them, with no request
-    made or matched anew.  Zeros without a communicator (a plan to inspect)."""
-    req = np.zeros(2 * len(peers), mpi.REQUEST_DTYPE)
-    if comm is None or not peers:
-        return req
+def _persistent(comm, ranks, which, sbuf, sb_ptr, rbuf, rb_ptr, dtype):
+    """The requests of the peers ``which`` (indices into ``ranks``), [receive from each, send to each], as
+    persistent requests over the plan's buffers (``MPI_Recv_init``, ``MPI_Send_init``): a step starts them
+    and waits for them, with no request made or matched anew; and the mpi4py objects.  Zeros without a
+    communicator (a plan to inspect)."""
+    if comm is None or not which:
+        return np.zeros(2 * len(which), mpi.REQUEST_DTYPE), []
     from mpi4py import MPI
     ftype = MPI.DOUBLE if np.dtype(dtype) == np.float64 else MPI.FLOAT
-    made = [comm.Recv_init([rbuf[rb_ptr[i]:rb_ptr[i + 1]], ftype], source=p.rank, tag=TAG) for i, p in enumerate(peers)]
-    made += [comm.Send_init([sbuf[sb_ptr[i]:sb_ptr[i + 1]], ftype], dest=p.rank, tag=TAG) for i, p in enumerate(peers)]
+    made = [comm.Recv_init([rbuf[rb_ptr[i]:rb_ptr[i + 1]], ftype], source=ranks[i], tag=TAG) for i in which]
+    made += [comm.Send_init([sbuf[sb_ptr[i]:sb_ptr[i + 1]], ftype], dest=ranks[i], tag=TAG) for i in which]
     # MPICH's int handles come as unsigned numbers (as the communicator's in ``mpi.handles``): wrap them.
-    req[:] = np.array([MPI._handleof(r) % (1 << 64) for r in made], np.uint64).astype(mpi.REQUEST_DTYPE)
-    _HELD[id(req)] = (req, made)
-    return req
+    req = np.array([MPI._handleof(r) % (1 << 64) for r in made], np.uint64).astype(mpi.REQUEST_DTYPE)
+    return req, made
 
 
 def release(plan) -> None:
-    """Free the plan's persistent requests (none may be active: after ``mpi_complete``)."""
-    held = _HELD.pop(id(plan.req), None)
+    """Free the plan's persistent requests (none may be active: after ``mpi_complete``) and its shared
+    windows (collective over the node: every rank releases its plan at the same time)."""
+    held = _HELD.pop(id(plan.seq), None)
     if held is not None:
-        for r in held[1]:
+        for r in held[0]:
             r.Free()
+        if held[1] is not None:
+            held[1].free()
 
 
 @atexit.register
@@ -118,7 +194,7 @@ def _release_all() -> None:
     from mpi4py import MPI
     if MPI.Is_finalized():
         return
-    for _, made in list(_HELD.values()):
+    for made, _ in list(_HELD.values()):
         for r in made:
             r.Free()
     _HELD.clear()
@@ -162,15 +238,15 @@ def _move(buf, k, a, r, j0, n, out):
 
 
 @njit(cache=True, _nrt=False)
-def _transfer(plan, i, bx, by, tx, ty, bonds, out):
-    """Peer i's message: pack my OWNED values into the send buffer (``out``), or unpack its values
+def _transfer(plan, i, buf, k, bx, by, tx, ty, bonds, out):
+    """Peer i's message, at ``buf[k:]``: pack my OWNED values into it (``out``), or unpack its values
     into my HALO copies: every rectangle's x then y, then each run of interface sites' travelling
     bond rows, one row after the other."""
     if out:
-        buf, k, segs, lo, hi = plan.sbuf, plan.sb_ptr[i], plan.ss, plan.ss_ptr[i], plan.ss_ptr[i + 1]
+        segs, lo, hi = plan.ss, plan.ss_ptr[i], plan.ss_ptr[i + 1]
         sites, slo, shi = plan.sts, plan.sts_ptr[i], plan.sts_ptr[i + 1]
     else:
-        buf, k, segs, lo, hi = plan.rbuf, plan.rb_ptr[i], plan.rs, plan.rs_ptr[i], plan.rs_ptr[i + 1]
+        segs, lo, hi = plan.rs, plan.rs_ptr[i], plan.rs_ptr[i + 1]
         sites, slo, shi = plan.rts, plan.rts_ptr[i], plan.rts_ptr[i + 1]
     for g in range(lo, hi):
         sg = segs[g]
@@ -194,7 +270,10 @@ def pack_all(plan, bx, by, tx, ty, bonds, out, repeats):
     micro-benchmark times it in compiled code, as a call from Python costs microseconds itself)."""
     for _ in range(repeats):
         for i in range(plan.peer.shape[0]):
-            _transfer(plan, i, bx, by, tx, ty, bonds, out)
+            if out:
+                _transfer(plan, i, plan.sbuf, plan.sb_ptr[i], bx, by, tx, ty, bonds, out)
+            else:
+                _transfer(plan, i, plan.rbuf, plan.rb_ptr[i], bx, by, tx, ty, bonds, out)
 
 
 @njit(cache=True, _nrt=False)
@@ -217,38 +296,61 @@ EAGER_BYTES = 8192
 @njit(cache=True, _nrt=False)
 def mpi_progress(plan):
     """MPI_Testall on the posted requests, so MPI moves the messages while the loop computes; nothing when
-    every message is small enough to have gone whole at MPI_Start (``EAGER_BYTES``)."""
-    npeer = plan.peer.shape[0]
-    if npeer == 0:
+    every message is small enough to have gone whole at MPI_Start (``EAGER_BYTES``), or none goes by MPI."""
+    nreq = plan.req.shape[0]
+    if nreq == 0:
         return 0
     largest = 0
-    for i in range(npeer):
-        largest = max(largest, plan.sb_ptr[i + 1] - plan.sb_ptr[i], plan.rb_ptr[i + 1] - plan.rb_ptr[i])
+    for i in range(plan.peer.shape[0]):
+        if not plan.shared[i]:
+            largest = max(largest, plan.sb_ptr[i + 1] - plan.sb_ptr[i], plan.rb_ptr[i + 1] - plan.rb_ptr[i])
     if largest * plan.rbuf.itemsize <= EAGER_BYTES:
         return 0
-    return mpi.testall(np.int32(2 * npeer), plan.req.ctypes.data, plan.rflags.ctypes.data, plan.status.ctypes.data)
+    return mpi.testall(np.int32(nreq), plan.req.ctypes.data, plan.rflags.ctypes.data, plan.status.ctypes.data)
 
 
 @njit(cache=True, _nrt=False)
 def mpi_post(plan, bx, by, tx, ty, bonds):
-    """Pack every peer's message, then start the receives from and the sends to every peer in one call
-    (persistent requests, ``MPI_Startall``: one MPI call a step, not one per peer and one more); returns the
-    MPI error code."""
+    """Pack every peer's message: a peer on this node's straight into its window at this step's parity, then
+    its flag set to the step's sequence number (a release store); the others' into the send buffer, then
+    start the receives from and the sends to those in one call (persistent requests, ``MPI_Startall``);
+    returns the MPI error code."""
     npeer = plan.peer.shape[0]
     if npeer == 0:
         return 0
+    seq = plan.seq[0] + 1
+    plan.seq[0] = seq
+    par = seq & 1
+    out = np.bool_(True)                # a variable: one compiled _transfer for both directions
     for i in range(npeer):
-        _transfer(plan, i, bx, by, tx, ty, bonds, np.bool_(True))    # a variable: one compiled _transfer
-    return mpi.startall(np.int32(2 * npeer), plan.req.ctypes.data)
+        if plan.shared[i]:
+            _transfer(plan, i, plan.node, plan.dst[par, i], bx, by, tx, ty, bonds, out)
+            shm.store_release(plan.ready, plan.fdst[i], seq)
+        else:
+            _transfer(plan, i, plan.sbuf, plan.sb_ptr[i], bx, by, tx, ty, bonds, out)
+    nreq = plan.req.shape[0]
+    if nreq == 0:
+        return 0
+    return mpi.startall(np.int32(nreq), plan.req.ctypes.data)
 
 
 @njit(cache=True, _nrt=False)
 def mpi_complete(plan, bx, by, tx, ty, bonds):
-    """MPI_Waitall on what ``mpi_post`` started, then unpack into the HALO copies; returns the MPI error code."""
+    """Wait for what ``mpi_post`` started and unpack it into the HALO copies: the messages (MPI_Waitall),
+    then each on-node peer's window once its flag reads this step's sequence number (an acquire load);
+    returns the MPI error code."""
     npeer = plan.peer.shape[0]
     if npeer == 0:
         return 0
-    err = mpi.waitall(np.int32(2 * npeer), plan.req.ctypes.data, plan.status.ctypes.data)
+    nreq = plan.req.shape[0]
+    err = mpi.waitall(np.int32(nreq), plan.req.ctypes.data, plan.status.ctypes.data) if nreq else 0
+    seq = plan.seq[0]
+    par = seq & 1
+    out = np.bool_(False)
     for i in range(npeer):
-        _transfer(plan, i, bx, by, tx, ty, bonds, np.bool_(False))
+        if plan.shared[i]:
+            shm.wait_for(plan.ready, plan.fsrc[i], seq)
+            _transfer(plan, i, plan.node, plan.src[par, i], bx, by, tx, ty, bonds, out)
+        else:
+            _transfer(plan, i, plan.rbuf, plan.rb_ptr[i], bx, by, tx, ty, bonds, out)
     return err

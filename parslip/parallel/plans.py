@@ -21,5 +21,11 @@ SITES = np.dtype([("j0", np.int64), ("n", np.int64)])
 # ``travel``: the indices of the bond table's rows that travel (``model.interface.BONDS.travel``); ``rflags``:
 # the reduction's receive buffer (and MPI_Testall's flag), REDUCE_WORDS int64: the loop's flags must fit.
 REDUCE_WORDS = 32
+# A peer on this rank's node is reached through shared windows (``parallel.shm``), the others by MPI messages
+# (``req``: persistent requests for those only, receives then sends).  ``shared[i]``: 1 if peer i shares the
+# node; ``node``: the data window's array over the node; ``dst[p, i]`` where in it this rank writes its message
+# to peer i at step parity p, ``src[p, i]`` where peer i's message to it lies; ``ready``: the flag window's
+# array, ``fdst[i]`` the flag this rank sets for peer i, ``fsrc[i]`` the one peer i sets for it; ``seq[0]``:
+# the sequence number of the last step posted.
 Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "
-                          "req status handles rflags travel")
+                          "req status handles rflags travel shared node dst src ready fdst fsrc seq")

@@ -54,6 +54,11 @@ class Setup:
         return bool(self.scene.get("run.overlap", False))
 
     @property
+    def shared_memory(self) -> bool:
+        """Whether ranks on one node exchange halos through shared windows (``run.exchange``)."""
+        return self.scene.get("run.exchange", "auto") == "auto"
+
+    @property
     def n_steps(self) -> int:
         return self.n_ramp + self.n_settle + self.n_drive
 

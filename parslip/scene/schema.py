@@ -218,6 +218,11 @@ SCHEMA: dict[str, Key] = {
                        "the messages travel (each row cut in two); false: update each row whole, then exchange.  "
                        "Overlap pays only where a message takes longer than cutting every row costs (about 0.1 us "
                        "per row of the slab here: docs/hpc/scaling.md); the results are the same bits either way"),
+    "run.exchange": Key("auto", str, "-", "'auto' or 'messages'", _choice("auto", "messages"),
+                        "on several ranks: how halo copies travel.  'auto': between ranks on one node through "
+                        "shared memory (an MPI-3 window each rank writes its peers' copies into, with a flag "
+                        "per message: no MPI call a step), between nodes by MPI messages; 'messages': MPI "
+                        "messages everywhere.  The results are the same bits either way"),
     "run.watchdog": Key(180.0, float, "s", ">= 0 (0 = off)", _range(0.0),
                         "on several ranks: end the job (exit 3, output marked failed) when the ranks have not "
                         "agreed for this long; --watchdog overrides it"),

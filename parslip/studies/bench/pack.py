@@ -71,7 +71,7 @@ def exchange(setup, comm, seconds: float = 1.0) -> dict:
     from ...parallel.layout import build_layout
     rank, size = comm.Get_rank(), comm.Get_size()
     lay = build_layout(setup.lattice, rank, size, setup.reach, setup.drive.mode, overlap=setup.overlap)
-    plan = plan_of(lay, np.float64, comm)
+    plan = plan_of(lay, np.float64, comm, setup.shared_memory)
     bl, tl = lay.blocks
     bx, by, tx, ty = (np.zeros(b.shape) for b in (bl, bl, tl, tl))
     bonds = np.zeros((len(BONDS.names), tl.width))
