@@ -50,11 +50,11 @@ def describe(plan, comm) -> str:
     mine = np.array([shared, -shared, len(plan.peer) - shared, shared - len(plan.peer)], np.int64)
     got = np.empty_like(mine)
     comm.Allreduce(mine, got, op=MPI.MIN)
-    lo_s, hi_s, lo_m, hi_m = got[0], -got[1], got[2], -got[3]
+    lo_s, hi_s, lo_m, hi_m = (int(v) for v in (got[0], -got[1], got[2], -got[3]))
     if hi_s == 0:
         return "halo exchange: MPI messages"
     span = lambda lo, hi: f"{lo}" if lo == hi else f"{lo} to {hi}"      # noqa: E731
-    line = f"halo exchange: shared memory with {span(lo_s, hi_s)} peer{'s' * (hi_s > 1)} on its node"
+    line = f"halo exchange: shared memory with {span(lo_s, hi_s)} {'peers' if hi_s > 1 else 'peer'} on its node"
     return line + (f", messages to {span(lo_m, hi_m)}" if hi_m else "")
 
 
