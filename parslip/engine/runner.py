@@ -293,6 +293,7 @@ class Job:
                 self.prog.done()
         outcome = self.outcome()
         self._memory_line()
+        self.sim.release()          # collective, as the lines above: a sweep's runs leave no window behind
         if self.ranks.rank == 0:
             self._report(outcome)
         return outcome

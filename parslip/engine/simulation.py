@@ -86,6 +86,13 @@ class Simulation:
         self.events_written = 0          # bond events in the output file (over all ranks)
         self.hold = Hold(st, self.comm)  # drive.prestress: where the loader stops
 
+    def release(self):
+        """Free what the exchange plan holds in MPI (its requests, its shared windows); collective over the
+        ranks of a node.  The simulation cannot step afterwards."""
+        if getattr(self, "plan", None) is not None:
+            release(self.plan)
+            self.plan = None
+
     def _build(self, layout):
         """This rank's arrays for ``layout``, all zero: the state, the exchange plan, the schedule, the frame
         buffer (the frames held so far must have been written) and the budget's running totals, and the
@@ -98,8 +105,7 @@ class Simulation:
         counts = owned_site_counts(lat, layout.bounds, layout.offsets[1])
         self.event_limit, capacity = event_room(int(counts[rank]) if lat.has_interface else 0, self.buffer_events)
         self.state = State(st, layout, self.dtype, event_capacity=capacity)
-        if getattr(self, "plan", None) is not None:
-            release(self.plan)
+        self.release()
         self.plan = build_plan(layout, self.dtype, self.comm, st.shared_memory)
         self.sched = L.Schedule(tasks=layout.tasks, ptr=task_ranges(layout.tasks))
         drift = layout.reach.drift if layout.reach is not None else None

@@ -63,7 +63,7 @@ FORMAT = "parslip checkpoint 4"          # 2: with drive_force; 3: with events_w
 OLD_FORMATS = ("parslip checkpoint 3",)  # read as a single layout
 SAFE_KEYS = ("drive.duration", "output.interface_dt", "output.snapshots", "output.progress_s",
              "output.buffer_frames", "output.buffer_events", "checkpoint.every", "checkpoint.wall",
-             "interface.slip_reach", "interface.halo_skin", "run.watchdog", "run.overlap")
+             "interface.slip_reach", "interface.halo_skin", "run.watchdog", "run.overlap", "run.exchange")
 # Keys added to the scene since checkpoints of this format were first written, with the value that gives
 # the behaviour of the code that wrote them: a checkpoint whose scene lacks such a key was written with it.
 IMPLIED = {"interface.contact": 0.0, "time.damping": "absolute", "output.energy": "balance",

@@ -31,7 +31,8 @@ import ctypes
 import numpy as np
 from numba import types
 from numba.core import cgutils
-from numba.extending import intrinsic, register_jitable
+from numba import njit
+from numba.extending import intrinsic
 
 # The flags' stride (int64): one cache line per flag.
 FLAG_STRIDE = 8
@@ -72,7 +73,7 @@ def store_release(typingctx, arr, idx, value):
     return sig, codegen
 
 
-@register_jitable
+@njit(cache=True, _nrt=False)
 def wait_for(flags, i, value):
     """Return once flags[i] reads ``value`` or more (acquire): spin, then yield the core, then sleep."""
     spins = 0
