@@ -18,7 +18,7 @@ from helpers import SMALL, WRITERS, datasets, require, run_cli, scene, small_tom
 from parslip.engine.simulation import Simulation
 from parslip.io.contract import read_status
 from parslip.model.lattice import Lattice
-from parslip.parallel.exchange import build_plan
+from parslip.parallel.exchange import build_plan, release
 from parslip.parallel.halo_mpi import mpi_complete, mpi_post
 from parslip.parallel.layout import PAD, build_layout, column_cost, interface_reach, partition
 from parslip.scene.derive import derive
@@ -33,39 +33,45 @@ def _gids(lat, lay, b):
 
 
 @pytest.mark.parallel(nprocs=2)
-def test_halo_exchange_by_global_id():
+@pytest.mark.parametrize("shared", (True, False))
+def test_halo_exchange_by_global_id(shared):
     """A 4-row free strip of 10 columns cut at column 5 (bulk rows only: a halo of one column).
 
         column      0 1 2 3 4 | 5 6 7 8 9
         rank 0      O O O O O | H              O owned, H halo copy
         rank 1              H | O O O O O
 
-    After the exchange every halo copy holds its owner's value (here 1000 + gid)
-    and no other cell changed.
+    After the exchange every halo copy holds its owner's value (here 1000 + gid, then 2000 + gid, 3000 + gid
+    in the steps after: the shared windows' two parities and the first one again) and no other cell changed;
+    through the shared window and by MPI messages alike.
     """
     from mpi4py import MPI
     comm = MPI.COMM_WORLD
     lat = Lattice(4, 10, 0, 0)
     lay = build_layout(lat, comm.rank, comm.size, interface_reach(0.5, 0.7, 0.0))
     assert lay.col_range == ((0, 5) if comm.rank == 0 else (5, 10))
-    plan = build_plan(lay, np.float64, comm)
+    plan = build_plan(lay, np.float64, comm, shared)
+    assert list(plan.shared) == [int(shared)]
     gid = _gids(lat, lay, 1)
     B = lay.blocks[1]
     cols = np.arange(B.width) + B.base
     lo, hi = lay.col_range
     owned = (gid >= 0) & (cols[None, :] >= lo) & (cols[None, :] < hi)
-    tx = np.where(owned, 1000.0 + gid, -1.0)
-    ty = -tx
-    e = np.zeros((0, 0))
-    bonds = np.zeros((2, B.width))
-    assert mpi_post(plan, e, e, tx, ty, bonds) == 0
-    assert mpi_complete(plan, e, e, tx, ty, bonds) == 0
     halo_col = 5 if comm.rank == 0 else 4
     halo = (gid >= 0) & (cols[None, :] == halo_col)
     assert halo.sum() == 4
-    np.testing.assert_array_equal(tx[halo], 1000.0 + gid[halo])
-    np.testing.assert_array_equal(ty[halo], -1000.0 - gid[halo])
-    np.testing.assert_array_equal(tx[~halo & ~owned], -1.0)            # ghost and unneeded cells untouched
+    e = np.zeros((0, 0))
+    bonds = np.zeros((2, B.width))
+    tx = np.where(owned, 0.0, -1.0)
+    for step in (1, 2, 3):
+        tx[owned] = 1000.0 * step + gid[owned]
+        ty = -tx
+        assert mpi_post(plan, e, e, tx, ty, bonds) == 0
+        assert mpi_complete(plan, e, e, tx, ty, bonds) == 0
+        np.testing.assert_array_equal(tx[halo], 1000.0 * step + gid[halo])
+        np.testing.assert_array_equal(ty[halo], -1000.0 * step - gid[halo])
+        np.testing.assert_array_equal(tx[~halo & ~owned], -1.0)            # ghost and unneeded cells untouched
+    release(plan)
 
 
 @pytest.mark.parallel(nprocs=2)

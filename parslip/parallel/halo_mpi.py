@@ -7,12 +7,11 @@ importing it loads the MPI library mpi4py uses (``parallel.mpi``).
 (persistent requests, made once per plan: MPI_Recv_init, MPI_Send_init; one MPI_Startall);
 ``mpi_complete`` waits (MPI_Waitall) and unpacks into the HALO copies.  A peer on the same node is reached
 through shared memory instead (``parallel.shm``, unless the scene says ``run.exchange = "messages"``): the
-message is packed straight into the peer's window and a flag says it is there, with no MPI call; ``mpi_progress`` tests the requests
-so MPI moves large messages while the loop computes; ``mpi_reduce_max`` takes the MAX
-of the loop's flags over all ranks (MPI_Allreduce).  One message per peer
-per step carries every rectangle of row segments' x then y, then, for each run of
-interface sites, the travelling rows of the bond table
-(``model.interface.BONDS.travel``, ``Plan.travel``) one after the other.  The bond
+message is packed straight into the peer's window and a flag says it is there, with no MPI call.
+``mpi_progress`` tests the requests so MPI moves large messages while the loop computes; ``mpi_reduce_max``
+takes the MAX of the loop's flags over all ranks (MPI_Allreduce).  One message per peer per step carries
+every rectangle of row segments' x then y, then, for each run of interface sites, the travelling rows of
+the bond table (``model.interface.BONDS.travel``, ``Plan.travel``) one after the other.  The bond
 table is in the state's float type: integers (partners) are exact below
 2^24 even in float32.
 """
@@ -109,9 +108,23 @@ def node_comm(comm):
         node = comm.Split_type(MPI.COMM_TYPE_SHARED, key=comm.Get_rank())
         group = int(os.environ.get("PARSLIP_NODE_RANKS", "0") or 0)
         if group > 0:
-            node = node.Split(color=node.Get_rank() // group, key=node.Get_rank())
+            whole, node = node, node.Split(color=node.Get_rank() // group, key=node.Get_rank())
+            whole.Free()
         _NODES[key] = node
     return _NODES[key]
+
+
+def _node_ranks(comm, node, ranks) -> list:
+    """The ranks of ``node`` that ``ranks`` (of ``comm``) have; MPI.UNDEFINED for those on other nodes."""
+    if not ranks:
+        return []
+    from mpi4py import MPI
+    a, b = comm.Get_group(), node.Get_group()
+    try:
+        return MPI.Group.Translate_ranks(a, ranks, b)
+    finally:
+        a.Free()
+        b.Free()
 
 
 def _unlinked(ranks, dtype) -> dict:
@@ -131,7 +144,7 @@ def _link(comm, ranks, sb_ptr, rb_ptr, dtype) -> dict:
     node = node_comm(comm)
     n, tot = len(ranks), int(rb_ptr[-1])
     win = shm.Windows(node, dtype, tot, n)
-    on = MPI.Group.Translate_ranks(comm.Get_group(), ranks, node.Get_group()) if n else []
+    on = _node_ranks(comm, node, ranks)
     tell = np.array([[rb_ptr[i], tot + rb_ptr[i], rb_ptr[i + 1] - rb_ptr[i], i * shm.FLAG_STRIDE]
                      for i in range(n)], np.int64).reshape(n, 4)
     got = np.zeros_like(tell)
@@ -190,7 +203,9 @@ def release(plan) -> None:
 @atexit.register
 def _release_all() -> None:
     """Free the requests of the plans still held when the process ends, before mpi4py finalizes MPI (its exit
-    handler was registered first, so it runs after this one): MPI_Finalize would report each as leaked."""
+    handler was registered first, so it runs after this one): MPI_Finalize would report each as leaked.
+    Their shared windows are left to MPI_Finalize: freeing a window is collective over the node, and a rank
+    that leaves early (an error, a test's own plan) would leave the others waiting in it."""
     from mpi4py import MPI
     if MPI.Is_finalized():
         return
