@@ -67,7 +67,8 @@ def pytest_sessionstart(session):
     that needs a variant before its warm-up has stored it compiles it as before, so the warm-ups
     change no result and no test waits for them.  Started for the suite or a folder of it only: a run
     of chosen test files needs some of these variants at most, and a warm-up it does not need would
-    take a core from it.  Not started in the per-test pytest processes mpi-pytest launches, nor
+    take a core from it.  Not started in the per-test pytest processes mpi-pytest launches, nor in
+    pytest-xdist's workers (the README's command runs two; their controller starts the chain once), nor
     without the mpich wheel's launcher.
     """
     import shutil
@@ -76,7 +77,8 @@ def pytest_sessionstart(session):
 
     from helpers import WHEEL_MPIEXEC, cli_command, cli_env
     chosen = [a for a in session.config.args if not os.path.isdir(a)]
-    if chosen or "_PYTEST_MPI_CHILD_PROCESS" in os.environ or not WHEEL_MPIEXEC:
+    worker = "PYTEST_XDIST_WORKER" in os.environ           # pytest-xdist's workers: their controller warms up
+    if chosen or worker or "_PYTEST_MPI_CHILD_PROCESS" in os.environ or not WHEEL_MPIEXEC:
         return
     import shlex
     d = tempfile.mkdtemp(prefix="parslip-warm-")

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what the test suite needs; the README's test command runs it before pytest:
 #
-#     bash tests/install.sh && python -m pytest
+#     bash tests/install.sh && python -m pytest -n 2 --dist loadfile
 #
 # Each part is one function, idempotent and quiet when there is nothing to do.
 set -euo pipefail
