@@ -653,7 +653,11 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
         cur = _level(lv, n)
         if n == prm.n_drive_start:          # before its frame: the drive's start is the budget's zero
             _budget_start(cur, _level(lv, n + 1), drive, bud)
-        ok = _record(n, cur, _level(lv, n + 1), sched, K, prm, iface, drive, bud, frames, tm)
+        # Only a frame's step calls ``_record``: a call passes every array of its arguments (hundreds of
+        # words), which every step paid to learn it had nothing to record.
+        k = n - prm.n_drive_start
+        due = k >= 0 and k % prm.frame_every == 0 and k // prm.frame_every < prm.n_frames
+        ok = _record(n, cur, _level(lv, n + 1), sched, K, prm, iface, drive, bud, frames, tm) if due else True
         if not ok:
             beat[BEAT_IN_LOOP] = 0
             return n, FRAMES_FULL
