@@ -8,8 +8,8 @@ numba compiles:
   references no MPI symbol, so a one-rank run never loads an MPI library.
 - ``halo_mpi.Plan`` (several ranks): ``post`` packs the OWNED values each
   peer keeps as HALO and starts its persistent receives and sends (MPI_Startall),
-  or, for a peer on the same node, packs them straight into that peer's shared
-  window and sets a flag (``parallel.shm``); ``complete`` waits (MPI_Waitall,
+  or, for a peer on the same node, packs them into its own shared window
+  and sets a flag the peer reads (``parallel.shm``); ``complete`` waits (MPI_Waitall,
   or the peer's flag) and unpacks into the HALO copies; ``progress`` lets MPI move
   the messages while the loop computes (MPI_Testall); ``reduce_max`` takes
   the MAX of the loop's flags over all ranks (MPI_Allreduce).

@@ -23,8 +23,9 @@ SITES = np.dtype([("j0", np.int64), ("n", np.int64)])
 REDUCE_WORDS = 32
 # A peer on this rank's node is reached through shared windows (``parallel.shm``), the others by MPI messages
 # (``req``: persistent requests for those only, receives then sends).  ``shared[i]``: 1 if peer i shares the
-# node; ``node``: the data window's array over the node; ``dst[p, i]`` where in it this rank writes its message
-# to peer i at step parity p, ``src[p, i]`` where peer i's message to it lies; ``ready``: the flag window's
+# node; ``node``: the data window's array over the node; ``dst[p, i]`` where in it (in this rank's own
+# segment) this rank writes its message to peer i at step parity p, ``src[p, i]`` where peer i's message to
+# it lies (in peer i's segment); ``ready``: the flag window's
 # array, ``fdst[i]`` the flag this rank sets for peer i, ``fsrc[i]`` the one peer i sets for it; ``seq[0]``:
 # the sequence number of the last step posted.
 Plan = namedtuple("Plan", "peer ss ss_ptr sts sts_ptr rs rs_ptr rts rts_ptr sbuf sb_ptr rbuf rb_ptr "

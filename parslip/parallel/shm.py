@@ -8,14 +8,20 @@ values costs about 0.3 us.
 How (``halo_mpi.build_plan`` makes the windows, ``halo_mpi.mpi_post`` / ``mpi_complete`` use them):
 
 - Every rank of a node allocates, in one window over the node's communicator (``MPI_Win_allocate_shared``),
-  its receive buffer twice (one copy per step parity), and in a second window one flag per peer (a cache
-  line each, so two senders never write the same line).
-- A sender packs its message straight into the receiver's buffer of the step's parity, then publishes the
-  step's sequence number in its flag with a release store.  The receiver waits until an acquire load of that
-  flag reads the number, then unpacks.  Nothing else is called: no lock, no MPI.
+  its send buffer twice (one copy per step parity), and in a second window one flag per peer (a cache line
+  each, so no two flags share a line).
+- A sender packs each peer's message into its own window at the step's parity, then publishes the step's
+  sequence number in that peer's flag with a release store.  The receiver waits until an acquire load of
+  the flag reads the number, then unpacks straight from the sender's window.  Nothing else is called: no
+  lock, no MPI, and a rank writes only its own memory.
 - Two copies make it safe without a reply: a sender writes parity p of step n + 1 after it saw its peer's
   step n (the exchange is symmetric: every peer sends to every peer, an empty message included), which the
   peer published after it had unpacked step n - 1, the last one of parity p.
+- The lines a sender writes were read last by its peer, so each has to leave the peer's cache first.  The
+  sender asks for all of them at once before it packs (``prefetch_write``), so they travel together rather
+  than one after the other as the stores reach them.  Measured on 2 ranks of the main job's scene (this
+  host's two cores share a cache most of the time): posting took 0.70-0.77 us with it, 0.90-0.94 us
+  without; in stretches where they did not, 2.4-2.6 us without it.
 
 Where a peer shares no node, its messages stay MPI messages (persistent requests): a plan may mix both.
 
@@ -29,6 +35,7 @@ from __future__ import annotations
 import ctypes
 
 import numpy as np
+from llvmlite import ir
 from numba import types
 from numba.core import cgutils
 from numba import njit
@@ -73,6 +80,25 @@ def store_release(typingctx, arr, idx, value):
     return sig, codegen
 
 
+@intrinsic
+def prefetch_write(typingctx, arr, idx):
+    """Ask for the cache line of arr[idx] in a state to write it (x86 ``prefetchw``): a hint, which changes no
+    value.  The line a peer read last has to leave that peer's cache before this core writes it; asked for
+    early, that happens while the core computes."""
+    sig = types.void(arr, idx)
+
+    def codegen(context, builder, signature, args):
+        aryty = signature.args[0]
+        ary = context.make_array(aryty)(context, builder, args[0])
+        ptr = cgutils.get_item_pointer(context, builder, aryty, ary, [args[1]], wraparound=False)
+        i8p, i32 = ir.IntType(8).as_pointer(), ir.IntType(32)
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32]),
+                                            "llvm.prefetch.p0")
+        builder.call(fn, [builder.bitcast(ptr, i8p), i32(1), i32(3), i32(1)])     # write, keep, data
+        return context.get_dummy_value()
+    return sig, codegen
+
+
 @njit(cache=True, _nrt=False)
 def wait_for(flags, i, value):
     """Return once flags[i] reads ``value`` or more (acquire): spin, then yield the core, then sleep."""
@@ -86,21 +112,21 @@ def wait_for(flags, i, value):
 
 
 class Windows:
-    """The two shared windows of one rank on its node: ``data`` (the receive buffer's two parities, in the
+    """The two shared windows of one rank on its node: ``data`` (the send buffer's two parities, in the
     state's float type) and ``flags`` (int64, one cache line per peer), with views of every node rank's
     segment in this process's address space.  Collective over ``node`` (made and freed together)."""
 
-    def __init__(self, node, dtype, recv_values: int, npeer: int):
+    def __init__(self, node, dtype, values: int, npeer: int):
         from mpi4py import MPI
         self.node = node
         item = np.dtype(dtype).itemsize
         # At least a cache line each, so every rank's segment has an address of its own.
-        self._data = MPI.Win.Allocate_shared(max(2 * recv_values * item, 64), item, comm=node)
+        self._data = MPI.Win.Allocate_shared(max(2 * values * item, 64), item, comm=node)
         self._flags = MPI.Win.Allocate_shared(max(npeer, 1) * FLAG_STRIDE * 8, 8, comm=node)
         self.data, self.data_base = _span(self._data, node.Get_size(), dtype)
         self.flags, self.flags_base = _span(self._flags, node.Get_size(), np.int64)
         me = node.Get_rank()
-        self.data[self.data_base[me]:self.data_base[me] + 2 * recv_values] = 0
+        self.data[self.data_base[me]:self.data_base[me] + 2 * values] = 0
         self.flags[self.flags_base[me]:self.flags_base[me] + max(npeer, 1) * FLAG_STRIDE] = 0
         node.Barrier()        # every flag reads 0 before any rank posts
 
