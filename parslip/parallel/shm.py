@@ -36,9 +36,8 @@ import ctypes
 
 import numpy as np
 from llvmlite import ir
-from numba import types
+from numba import njit, types
 from numba.core import cgutils
-from numba import njit
 from numba.extending import intrinsic
 
 # The flags' stride (int64): one cache line per flag.
@@ -83,8 +82,8 @@ def store_release(typingctx, arr, idx, value):
 @intrinsic
 def prefetch_write(typingctx, arr, idx):
     """Ask for the cache line of arr[idx] in a state to write it (x86 ``prefetchw``): a hint, which changes no
-    value.  The line a peer read last has to leave that peer's cache before this core writes it; asked for
-    early, that happens while the core computes."""
+    value.  The line a peer read last has to leave that peer's cache before this core writes it; lines asked
+    for together leave together."""
     sig = types.void(arr, idx)
 
     def codegen(context, builder, signature, args):
