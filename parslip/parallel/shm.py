@@ -91,8 +91,10 @@ def prefetch_write(typingctx, arr, idx):
         ary = context.make_array(aryty)(context, builder, args[0])
         ptr = cgutils.get_item_pointer(context, builder, aryty, ary, [args[1]], wraparound=False)
         i8p, i32 = ir.IntType(8).as_pointer(), ir.IntType(32)
+        # The typed-pointer name (LLVM 14, numba 0.58-0.60); newer LLVMs rename it to llvm.prefetch.p0 as
+        # they read it.
         fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32]),
-                                            "llvm.prefetch.p0")
+                                            "llvm.prefetch.p0i8")
         builder.call(fn, [builder.bitcast(ptr, i8p), i32(1), i32(3), i32(1)])     # write, keep, data
         return context.get_dummy_value()
     return sig, codegen
