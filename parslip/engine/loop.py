@@ -516,16 +516,26 @@ def _energies(n, cur, old, sched, prm, iface, bud, out):
                                  old.bx[br], old.by[br], iface, out)
 
 
-@njit(cache=True, _nrt=False)
-def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
-    """Record frame k at step n if due; False when the buffer is full (the caller must flush first)."""
+
+@njit(cache=True, _nrt=False, inline="always")      # both advance and _record call it: inlined in each
+def _frame_of(n, prm):
+    """The frame step n records (counted from the drive's start), or -1 if n is not a frame's step."""
     k = n - prm.n_drive_start
     fe = prm.frame_every
     if k < 0 or k % fe != 0 or k // fe >= prm.n_frames:
+        return -1
+    return k // fe
+
+
+@njit(cache=True, _nrt=False)
+def _record(n, cur, old, sched, K, prm, iface, drive, bud, frames, tm):
+    """Record frame k at step n if due; False when the buffer is full (the caller must flush first)."""
+    f = _frame_of(n, prm)
+    if f < 0:
         return True
-    timed = (k // fe) % TIME_EVERY == 0
+    timed = f % TIME_EVERY == 0
     t0 = now_ns(tm[T_CLOCK:T_CLOCK + 2]) if timed else 0
-    k = k // fe + prm.frame_offset         # the frame's index in the file
+    k = f + prm.frame_offset               # the frame's index in the file
     cursor = frames.cursor
     if k <= cursor[C_LAST]:
         return True
@@ -655,8 +665,7 @@ def advance(n0, n1, lv, plan, sched, K, prm, iface, drive, frames, diag, bud):
             _budget_start(cur, _level(lv, n + 1), drive, bud)
         # Only a frame's step calls ``_record``: a call passes every array of its arguments (hundreds of
         # words), which every step paid to learn it had nothing to record.
-        k = n - prm.n_drive_start
-        due = k >= 0 and k % prm.frame_every == 0 and k // prm.frame_every < prm.n_frames
+        due = _frame_of(n, prm) >= 0
         ok = _record(n, cur, _level(lv, n + 1), sched, K, prm, iface, drive, bud, frames, tm) if due else True
         if not ok:
             beat[BEAT_IN_LOOP] = 0

@@ -90,7 +90,7 @@ def build_plan(layout, dtype, comm=None, shared=True) -> Plan:
                 rflags=np.zeros(REDUCE_WORDS, np.int64), travel=np.array(BONDS.travel, np.int64),
                 seq=np.zeros(1, np.int64), **link)
     if made or windows is not None:
-        _HELD[id(plan.seq)] = (made, windows)
+        _HELD[id(plan.seq)] = (made, windows, plan.seq)       # the key's array kept alive with its entry
     return plan
 
 
@@ -210,7 +210,7 @@ def _release_all() -> None:
     from mpi4py import MPI
     if MPI.Is_finalized():
         return
-    for made, _ in list(_HELD.values()):
+    for made, _, _ in list(_HELD.values()):
         for r in made:
             r.Free()
     _HELD.clear()
