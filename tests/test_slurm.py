@@ -151,16 +151,16 @@ def test_restart_chain_continues_to_the_end(cluster, tmp_path):
 
     937,000 steps: 6 to 19 s of stepping on 2 ranks (150,000 to 50,000 steps/s, idle to loaded host).
     A link steps up to 400,000 of them on an idle host, so the first cannot finish, and 100,000 to
-    200,000 on a loaded one (none when its ranks take the 3 s to start), so 12 links leave surplus
-    links there too; a surplus link costs a second."""
+    200,000 on a loaded one (none when its ranks take the 3 s to start).  With the suite's two workers
+    beside it 12 links once ended 120,000 steps short, so 24 are submitted; a surplus link costs a second."""
     out = cluster.out / "chain.vtkhdf"
     cluster.out.mkdir(exist_ok=True)
     long = {"drive.duration": 3000.0, "drive.v0": 0.001}
     scene = cluster.dir / "long.toml"
     scene.write_text(small_toml(**long))
-    ids = cluster.run("bash", SLURM / "submit-chain.sh", scene, out, "12", PARSLIP_STOP_AFTER="00:00:03",
+    ids = cluster.run("bash", SLURM / "submit-chain.sh", scene, out, "24", PARSLIP_STOP_AFTER="00:00:03",
                       PARSLIP_SBATCH_ARGS="--ntasks=2").stdout.split()
-    assert len(ids) == 12
+    assert len(ids) == 24
     logs = [cluster.log(f"parslip-chain-{j}.log") for j in ids]
     assert "checkpointed at step" in logs[0], logs[0]
     assert _status(out)[0] == "complete", logs[-1]
