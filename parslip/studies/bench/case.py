@@ -31,7 +31,7 @@ from ...errors import ConfigError  # noqa: E402
 from ...io.output import Output  # noqa: E402
 from ...parallel import collective  # noqa: E402
 from ...scene.derive import derive  # noqa: E402
-from ...scene.load import load  # noqa: E402
+from ...scene.load import load, overrides  # noqa: E402
 
 T_IMPORTS = time.perf_counter() - T0
 
@@ -92,7 +92,7 @@ def main():
     a = p.parse_args()
     comm = MPI.COMM_WORLD
     rank, size = comm.Get_rank(), comm.Get_size()
-    extra = [(k, json.loads(v)) for k, v in (s.split("=", 1) for s in a.set)]
+    extra = overrides(a.set)                  # KEY=VALUE, the value a TOML literal (as `parslip run --set`)
     t = time.perf_counter()
     sc = scene_at(a.l, a.mode, a.precision, extra)
     st = collective.decide(comm, lambda: derive(sc))

@@ -53,11 +53,12 @@ def _node_ns(q, rows: dict, base: Coefficients, mode: str) -> float:
 
 
 def exchange_latency(l: int, mode: str = "shear", seconds: float = 1.0, timeout: float = 300.0) -> dict | None:
-    """``bench.pack --exchange`` on 2 ranks at contact length ``l``: rank 0's figures (us per exchange, its
-    packing, us per message), or None if it did not finish."""
+    """``bench.pack --exchange`` on 2 ranks at contact length ``l``, by MPI's messages (``scaling.MESSAGES``):
+    rank 0's figures (us per exchange, its packing, us per message), or None if it did not finish."""
     from ...parallel.launcher import python_command
+    from .scaling import MESSAGES
     cmd = python_command("parslip.studies.bench.pack", str(l), "--mode", mode, "--exchange", "--seconds", seconds,
-                         ranks=2)
+                         *MESSAGES, ranks=2)
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:

@@ -110,10 +110,10 @@ def main(argv=None) -> int:
     p.add_argument("--exchange", action="store_true", help="under mpiexec: time the whole exchange of a step")
     a = p.parse_args(argv)
     from ...scene.derive import derive
-    from ...scene.load import load
+    from ...scene.load import load, overrides
     if a.scene.isdigit():
         from .case import scene_at
-        st = derive(scene_at(int(a.scene), a.mode, "float64", [tuple(v.split("=", 1)) for v in a.set]))
+        st = derive(scene_at(int(a.scene), a.mode, "float64", overrides(a.set)))   # values as TOML literals
     else:
         st = derive(load(a.scene, a.set))
     if a.exchange:

@@ -252,7 +252,9 @@ class Coefficients:
     single_ns          ns per node the loop updates on its own (block edges, short pieces)
     fixed_us           us per step that does not scale (loop overhead, flag checks, the exchange's calls)
     pack_ns_per_value  ns to pack or unpack one halo value (``studies.bench.pack``, measured directly)
-    latency_us         us per message (MPI's small-message latency on the network)
+    latency_us         us per message (MPI's small-message latency on the network; measured by MPI's messages
+                       between 2 ranks, ``run.exchange = "messages"``: ranks on one node that share memory
+                       pay less, ``parallel.shm``)
     bandwidth_gbs      GB/s per rank on the network
     overlap            the messages travel while the interior computes (``run.overlap``: the scene's, set by
                        ``travel_model``; the code before overlapped)
@@ -458,6 +460,11 @@ def wait_quiet(limit: float = 0.1, timeout: float = 300.0, log=print) -> float |
     return busy
 
 
+# The route the model charges each message by (``Coefficients.latency_us``: MPI's messages, what a peer on another
+# node pays): its latency and the runs it is checked against take it, not a node's shared memory (``run.exchange``).
+MESSAGES = ("--set", 'run.exchange="messages"')
+
+
 def run_case(l: int, ranks: int, seconds: float, mode: str, timeout: float) -> dict | None:
     """``python -m parslip.studies.bench.case`` under mpiexec in a session of its own; None if it ran past ``timeout`` s.
 
@@ -466,7 +473,7 @@ def run_case(l: int, ranks: int, seconds: float, mode: str, timeout: float) -> d
     """
     from ...parallel.launcher import python_command
     cmd = python_command("parslip.studies.bench.case", "--l", l, "--mode", mode, "--precision", "float64",
-                         "--seconds", seconds, ranks=ranks)
+                         "--seconds", seconds, *MESSAGES, ranks=ranks)
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         out, err = p.communicate(timeout=timeout)
