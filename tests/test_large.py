@@ -227,3 +227,26 @@ def test_measure_keeps_the_fastest_clean_repeat_resumes_and_survives_a_timeout(t
     (tmp_path / "bench.json").write_text('{"cases": []}')
     with pytest.raises(ValueError, match="not a file of scaling points"):
         scaling.measure([100], [1], path=str(tmp_path / "bench.json"), log=lambda m: None)
+
+
+def test_bench_pack_takes_set_values_as_toml_literals_and_packs_what_the_model_counts():
+    """`python -m parslip.studies.bench.pack L --set KEY=VALUE`: the value a TOML literal (the scaling model's
+    latency is measured with ``run.exchange = "messages"``, a string), and the values it packs and unpacks
+    those the travel model charges that rank (``parallel.counts``, in closed form)."""
+    import json
+    import subprocess
+    import sys
+    from parslip.parallel.counts import rank_counts
+    from parslip.parallel.layout import slab_bounds
+    from parslip.scene.derive import derive
+    from parslip.studies.bench.case import scene_at
+    p = subprocess.run([sys.executable, "-m", "parslip.studies.bench.pack", "100", "--mode", "push", "--seconds",
+                        "0.05", *scaling.MESSAGES, "--set", "drive.v0=2e-3"], capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    got = json.loads(p.stdout.strip().splitlines()[-1])
+    st = derive(scene_at(100, "push", "float64", [("drive.v0", 2e-3)]))
+    c = rank_counts(st.lattice, slab_bounds(st.lattice, 2), st.reach, (0, 0), st.overlap)
+    assert (got["ranks"], got["rank"], got["peers"]) == (2, 1, 1)
+    assert got["values_sent"] + got["values_received"] == int(c.values[1])
+    assert got["ns_per_value"] > 0
