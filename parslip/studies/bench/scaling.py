@@ -466,7 +466,8 @@ MESSAGES = ("--set", 'run.exchange="messages"')
 
 
 def run_case(l: int, ranks: int, seconds: float, mode: str, timeout: float) -> dict | None:
-    """``python -m parslip.studies.bench.case`` under mpiexec in a session of its own; None if it ran past ``timeout`` s.
+    """``python -m parslip.studies.bench.case`` under mpiexec in a session of its own, its halos by MPI's messages
+    (``MESSAGES``); None if it ran past ``timeout`` s.
 
     A case that runs too long (ranks spinning on an oversubscribed machine) is ended as a whole
     process group, so no rank is left behind spinning.
